@@ -1,0 +1,299 @@
+#include "core/gmsh_reader.hpp"
+
+#include <algorithm>
+#include <span>
+#include <string_view>
+#include <unordered_map>
+#include <vector>
+
+#include "core/error.hpp"
+#include "core/text_parsing.hpp"
+
+namespace depthfem {
+
+namespace {
+
+using Tokens = std::span<const std::string_view>;
+
+constexpr long long kTet4 = 4;
+// Gmsh element types of dimension 0 to 2 (points, lines, triangles, quadrangles of any order).
+constexpr long long kLowerDimensionalTypes[] = {1,  2,  3,  8,  9,  10, 15, 16, 20,
+                                                21, 22, 23, 24, 25, 26, 27, 28};
+struct VolumeType {
+  long long type;
+  const char* name;
+};
+// Gmsh volume element types other than the 4-node tetrahedron: rejected with their name.
+constexpr VolumeType kOtherVolumeTypes[] = {
+    {5, "8-node hexahedron"},    {6, "6-node prism"},         {7, "5-node pyramid"},
+    {11, "10-node tetrahedron"}, {12, "27-node hexahedron"},  {13, "18-node prism"},
+    {14, "14-node pyramid"},     {17, "20-node hexahedron"},  {18, "15-node prism"},
+    {19, "13-node pyramid"},     {29, "20-node tetrahedron"}, {30, "35-node tetrahedron"},
+    {31, "56-node tetrahedron"}, {92, "64-node hexahedron"},  {93, "125-node hexahedron"}};
+
+enum class MshVersion { v2_2, v4_1 };
+
+// Everything read so far; tets keep node tags until the whole file is read, because Gmsh allows
+// $Elements before $Nodes.
+struct MshContent {
+  std::vector<double> xyz;
+  std::unordered_map<long long, Index> node_of_tag;
+  MeshSource source;
+  std::vector<long long> tet_node_tags;  // 4 per tet
+  std::vector<long long> tet_tag;
+  bool has_nodes = false, has_elements = false;
+};
+
+std::string quoted(std::string_view token) {
+  return "'" + std::string(token) + "'";
+}
+
+// Advances to entry `read` of the `expected` ones (`noun`) of a section; throws when the file or
+// the section ends first.
+void next_entry(LineReader& in, const char* section, const char* noun, Index expected, Index read) {
+  const auto progress = [&] {
+    return " (expected " + std::to_string(expected) + " " + noun + ", read " +
+           std::to_string(read) + ")";
+  };
+  if (!in.next()) in.fail(std::string("file ends inside $") + section + progress());
+  if (in.tokens()[0].starts_with('$')) {
+    in.fail(std::string("$") + section + " ends early at " + quoted(in.tokens()[0]) + progress());
+  }
+}
+
+// Reads the "$EndSECTION" line that must follow the announced entries.
+void expect_section_end(LineReader& in, const std::string& section) {
+  const std::string end = "$End" + section;
+  if (!in.next()) in.fail("file ends inside $" + section + " (no " + end + ")");
+  if (in.tokens().size() != 1 || in.tokens()[0] != end) {
+    in.fail("expected " + end + " after the announced entries, found " + quoted(in.tokens()[0]));
+  }
+}
+
+// Skips a section this reader does not use ($PhysicalNames, $Entities, $NodeData, ...).
+void skip_section(LineReader& in, const std::string& section) {
+  const long start = in.line();
+  const std::string end = "$End" + section;
+  while (in.next()) {
+    if (in.tokens()[0] == end) return;
+  }
+  in.fail("file ends inside $" + section + " (started at line " + std::to_string(start) + ", no " +
+          end + ")");
+}
+
+// Reads "version file-type data-size" and "$EndMeshFormat".
+MshVersion read_mesh_format(LineReader& in) {
+  if (!in.next()) in.fail("file ends inside $MeshFormat");
+  in.expect_tokens(3, [] { return "$MeshFormat (version file-type data-size)"; });
+  const auto& t = in.tokens();
+  const double version = in.to_double(t[0], [] { return "the MSH version"; });
+  const long long file_type = in.to_integer(t[1], [] { return "the MSH file type"; });
+  if (file_type == 1) in.fail("binary MSH files are not supported; save the mesh as ASCII");
+  if (file_type != 0) in.fail("MSH file type must be 0 (ASCII), found " + quoted(t[1]));
+  MshVersion result = MshVersion::v2_2;
+  if (version == 4.1) {
+    result = MshVersion::v4_1;
+  } else if (version != 2.2) {
+    in.fail("unsupported MSH version " + quoted(t[0]) + " (supported: 2.2 and 4.1)");
+  }
+  expect_section_end(in, "MeshFormat");
+  return result;
+}
+
+void add_node(LineReader& in, MshContent& msh, long long tag, Tokens xyz) {
+  const auto [it, inserted] =
+      msh.node_of_tag.emplace(tag, static_cast<Index>(msh.node_of_tag.size()));
+  if (!inserted) {
+    in.fail("node " + std::to_string(tag) + " is defined twice (first at line " +
+            std::to_string(msh.source.node_line[it->second]) + ")");
+  }
+  static constexpr const char* kAxis[] = {"x", "y", "z"};
+  for (int k = 0; k < 3; ++k) {
+    msh.xyz.push_back(in.to_double(xyz[k], [&] {
+      return std::string(kAxis[k]) + " coordinate of node " + std::to_string(tag);
+    }));
+  }
+  msh.source.node_line.push_back(in.line());
+}
+
+// Keeps a 4-node tetrahedron, skips lower-dimensional elements, rejects every other type.
+void add_element(LineReader& in, MshContent& msh, long long tag, long long type, Tokens nodes) {
+  const auto element = [&] { return "element " + std::to_string(tag); };
+  if (type != kTet4) {
+    if (std::ranges::find(kLowerDimensionalTypes, type) != std::end(kLowerDimensionalTypes)) return;
+    const auto* volume = std::ranges::find(kOtherVolumeTypes, type, &VolumeType::type);
+    if (volume == std::end(kOtherVolumeTypes)) {
+      in.fail(element() + " has unsupported element type " + std::to_string(type));
+    }
+    in.fail(element() + " is a " + volume->name + " (type " + std::to_string(type) +
+            "); only 4-node tetrahedra (type 4) are supported");
+  }
+  if (nodes.size() != 4) {
+    in.fail("expected 4 node tags for " + element() + ", found " + std::to_string(nodes.size()));
+  }
+  for (const std::string_view node : nodes) {
+    msh.tet_node_tags.push_back(in.to_integer(node, [&] { return "a node tag of " + element(); }));
+  }
+  msh.tet_tag.push_back(tag);
+  msh.source.tet_line.push_back(in.line());
+}
+
+// Reads a count line: the first line of $Nodes or $Elements in MSH 2.2.
+Index read_count(LineReader& in, const std::string& section) {
+  const auto what = [&] { return "the number of entries in $" + section; };
+  if (!in.next()) in.fail("file ends inside $" + section);
+  in.expect_tokens(1, what);
+  return in.to_count(in.tokens()[0], what);
+}
+
+// MSH 2.2: "n", then n lines "tag x y z".
+void read_nodes_v2(LineReader& in, MshContent& msh) {
+  const Index count = read_count(in, "Nodes");
+  for (Index i = 0; i < count; ++i) {
+    next_entry(in, "Nodes", "nodes", count, i);
+    in.expect_tokens(4, [] { return "a node (tag x y z)"; });
+    const auto& t = in.tokens();
+    add_node(in, msh, in.to_integer(t[0], [] { return "a node tag"; }), Tokens(t).subspan(1));
+  }
+  expect_section_end(in, "Nodes");
+}
+
+// MSH 2.2: "n", then n lines "tag type #tags tags... nodes...".
+void read_elements_v2(LineReader& in, MshContent& msh) {
+  const Index count = read_count(in, "Elements");
+  for (Index i = 0; i < count; ++i) {
+    next_entry(in, "Elements", "elements", count, i);
+    const Tokens t = in.tokens();
+    if (t.size() < 3) in.fail("expected an element (tag type #tags tags... nodes...)");
+    const long long tag = in.to_integer(t[0], [] { return "an element tag"; });
+    const auto element = [&] { return "element " + std::to_string(tag); };
+    const long long type = in.to_integer(t[1], [&] { return "the type of " + element(); });
+    const Index num_tags = in.to_count(t[2], [&] { return "the number of tags of " + element(); });
+    if (t.size() < 3 + static_cast<size_t>(num_tags)) {
+      in.fail(element() + " announces " + std::to_string(num_tags) +
+              " tags but the line has only " + std::to_string(t.size() - 3) + " values after them");
+    }
+    add_element(in, msh, tag, type, t.subspan(3 + num_tags));
+  }
+  expect_section_end(in, "Elements");
+}
+
+// MSH 4.1: "#blocks #nodes min-tag max-tag", then per block "dim entity parametric n", n tag
+// lines and n coordinate lines "x y z [u [v [w]]]".
+void read_nodes_v4(LineReader& in, MshContent& msh) {
+  if (!in.next()) in.fail("file ends inside $Nodes");
+  const auto header = [] { return "the $Nodes header (#blocks #nodes min-tag max-tag)"; };
+  in.expect_tokens(4, header);
+  const Index num_blocks = in.to_count(in.tokens()[0], header);
+  const Index count = in.to_count(in.tokens()[1], header);
+  Index read = 0;
+  std::vector<long long> tags;
+  for (Index b = 0; b < num_blocks; ++b) {
+    next_entry(in, "Nodes", "nodes", count, read);
+    const auto block = [] { return "a node block header (dim entity parametric #nodes)"; };
+    in.expect_tokens(4, block);
+    const Index dim = in.to_count(in.tokens()[0], block);
+    const Index parametric = in.to_count(in.tokens()[2], block);
+    const Index n = in.to_count(in.tokens()[3], block);
+    if (dim > 3 || parametric > 1)
+      in.fail("invalid node block header (dimension 0..3, parametric 0 or 1)");
+    tags.clear();
+    for (Index i = 0; i < n; ++i) {
+      next_entry(in, "Nodes", "nodes", count, read);
+      in.expect_tokens(1, [] { return "a node tag"; });
+      tags.push_back(in.to_integer(in.tokens()[0], [] { return "a node tag"; }));
+    }
+    for (Index i = 0; i < n; ++i) {
+      next_entry(in, "Nodes", "nodes", count, read);
+      in.expect_tokens(3 + (parametric ? dim : 0),
+                       [&] { return "the coordinates of node " + std::to_string(tags[i]); });
+      add_node(in, msh, tags[i], in.tokens());
+      ++read;
+    }
+  }
+  if (read != count) {
+    in.fail("the node blocks hold " + std::to_string(read) + " nodes but $Nodes announced " +
+            std::to_string(count));
+  }
+  expect_section_end(in, "Nodes");
+}
+
+// MSH 4.1: "#blocks #elements min-tag max-tag", then per block "dim entity type n" and n lines
+// "tag nodes...".
+void read_elements_v4(LineReader& in, MshContent& msh) {
+  if (!in.next()) in.fail("file ends inside $Elements");
+  const auto header = [] { return "the $Elements header (#blocks #elements min-tag max-tag)"; };
+  in.expect_tokens(4, header);
+  const Index num_blocks = in.to_count(in.tokens()[0], header);
+  const Index count = in.to_count(in.tokens()[1], header);
+  Index read = 0;
+  for (Index b = 0; b < num_blocks; ++b) {
+    next_entry(in, "Elements", "elements", count, read);
+    const auto block = [] { return "an element block header (dim entity type #elements)"; };
+    in.expect_tokens(4, block);
+    const long long type = in.to_integer(in.tokens()[2], block);
+    const Index n = in.to_count(in.tokens()[3], block);
+    for (Index i = 0; i < n; ++i, ++read) {
+      next_entry(in, "Elements", "elements", count, read);
+      const Tokens t = in.tokens();
+      add_element(in, msh, in.to_integer(t[0], [] { return "an element tag"; }), type,
+                  t.subspan(1));
+    }
+  }
+  if (read != count) {
+    in.fail("the element blocks hold " + std::to_string(read) +
+            " elements but $Elements announced " + std::to_string(count));
+  }
+  expect_section_end(in, "Elements");
+}
+
+}  // namespace
+
+LoadedMesh read_gmsh(const std::string& path) {
+  LineReader in(path);
+  if (!in.next() || in.tokens()[0] != "$MeshFormat") {
+    in.fail("not a Gmsh MSH file: expected $MeshFormat on the first line");
+  }
+  const MshVersion version = read_mesh_format(in);
+  MshContent msh;
+  msh.source.file = path;
+  while (in.next()) {
+    const std::string_view head = in.tokens()[0];
+    if (head == "$Nodes") {
+      if (msh.has_nodes) in.fail("second $Nodes section");
+      msh.has_nodes = true;
+      if (version == MshVersion::v2_2)
+        read_nodes_v2(in, msh);
+      else
+        read_nodes_v4(in, msh);
+    } else if (head == "$Elements") {
+      if (msh.has_elements) in.fail("second $Elements section");
+      msh.has_elements = true;
+      if (version == MshVersion::v2_2)
+        read_elements_v2(in, msh);
+      else
+        read_elements_v4(in, msh);
+    } else if (head.starts_with('$') && !head.starts_with("$End") && in.tokens().size() == 1) {
+      skip_section(in, std::string(head.substr(1)));
+    } else {
+      in.fail("expected a section such as $Nodes or $Elements, found " + quoted(head));
+    }
+  }
+  if (!msh.has_nodes) throw InputError(located(path, 0, "has no $Nodes section"));
+  if (!msh.has_elements) throw InputError(located(path, 0, "has no $Elements section"));
+
+  std::vector<Index> tets(msh.tet_node_tags.size());
+  for (size_t i = 0; i < tets.size(); ++i) {
+    const auto it = msh.node_of_tag.find(msh.tet_node_tags[i]);
+    if (it == msh.node_of_tag.end()) {
+      throw InputError(located(path, msh.source.tet_line[i / 4],
+                               "element " + std::to_string(msh.tet_tag[i / 4]) +
+                                   " references node " + std::to_string(msh.tet_node_tags[i]) +
+                                   ", which is not defined"));
+    }
+    tets[i] = it->second;
+  }
+  return finish_loaded_mesh(msh.xyz, tets, msh.source);
+}
+
+}  // namespace depthfem

@@ -1,0 +1,41 @@
+#pragma once
+/// The mesh of a whole scene: several bodies stored in one set of structure-of-arrays.
+
+#include <string>
+#include <vector>
+
+#include "core/tet_mesh.hpp"
+
+namespace depthfem {
+
+/// Contiguous ranges of one body inside the scene arrays.
+struct Body {
+  std::string name;
+  Index first_node = 0, num_nodes = 0;
+  Index first_tet = 0, num_tets = 0;
+  Index first_tri = 0, num_tris = 0;
+};
+
+/// Reference nodes, tets and outward boundary triangles of every body of a scene.
+struct Mesh {
+  Points X;              ///< #nodes x 3 reference positions [m]
+  TetIndices tets;       ///< #tets x 4, positively oriented
+  TriIndices tris;       ///< #tris x 3 boundary triangles, outward
+  IndexVector tri_tet;   ///< #tris owning tet
+  IndexVector tet_body;  ///< #tets body id
+  IndexVector tri_body;  ///< #tris body id
+  std::vector<Body> bodies;
+
+  Index num_nodes() const { return static_cast<Index>(X.rows()); }
+  Index num_tets() const { return static_cast<Index>(tets.rows()); }
+  Index num_tris() const { return static_cast<Index>(tris.rows()); }
+
+  /// Appends a body (nodes, tets, its boundary triangles) and returns its id.
+  /// The mesh must already be validated (positive tets).
+  Index add_body(const std::string& name, const TetMesh& body);
+};
+
+/// A scene mesh holding one body.
+Mesh single_body_mesh(const TetMesh& body, const std::string& name = "body");
+
+}  // namespace depthfem

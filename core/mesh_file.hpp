@@ -1,0 +1,28 @@
+#pragma once
+/// Reading a tetrahedral mesh from a file, whatever its format.
+
+#include <string>
+#include <vector>
+
+#include "core/tet_mesh.hpp"
+
+namespace depthfem {
+
+/// A mesh read from a file and how many of its tets were re-oriented.
+struct LoadedMesh {
+  TetMesh mesh;          ///< validated, every tet positively oriented
+  Index reoriented = 0;  ///< tets whose last two nodes were swapped to make their volume positive
+};
+
+/// Reads a mesh, choosing the reader by extension: ".msh" (Gmsh 2.2 or 4.1 ASCII) or
+/// ".node"/".ele" (TetGen pair). Throws InputError for an unknown extension, a file that cannot be
+/// opened, or any malformed content, naming the file and line.
+LoadedMesh read_tet_mesh(const std::string& path);
+
+/// Last step of every reader: builds the mesh from row-major `xyz` (x0 y0 z0 x1 ...) and `tets`
+/// (4 0-based node indices per tet), throws InputError "FILE: contains no 4-node tetrahedra" when
+/// there are none, then runs validate_and_orient with the line numbers in `source`.
+LoadedMesh finish_loaded_mesh(const std::vector<double>& xyz, const std::vector<Index>& tets,
+                              const MeshSource& source);
+
+}  // namespace depthfem

@@ -1,0 +1,119 @@
+#include "core/tetgen_reader.hpp"
+
+#include <string_view>
+#include <vector>
+
+#include "core/text_parsing.hpp"
+
+namespace depthfem {
+
+namespace {
+
+std::string without_extension(const std::string& path) {
+  for (const std::string_view ext : {".node", ".ele"}) {
+    if (path.ends_with(ext)) return path.substr(0, path.size() - ext.size());
+  }
+  return path;
+}
+
+// Coordinates of NAME.node, row-major, and the number of its first point (0 or 1).
+struct TetgenNodes {
+  std::vector<double> xyz;
+  long long first = 0;
+};
+
+// "#points 3 #attributes #markers", then "number x y z [attributes] [marker]" per point.
+TetgenNodes read_node_file(const std::string& path) {
+  LineReader in(path, '#');
+  const auto header = [] { return "the header (#points dimension #attributes #markers)"; };
+  if (!in.next()) in.fail("file is empty; expected " + std::string(header()));
+  in.expect_tokens(4, header);
+  const Index count = in.to_count(in.tokens()[0], header);
+  const Index dim = in.to_count(in.tokens()[1], header);
+  const Index num_attributes = in.to_count(in.tokens()[2], header);
+  const Index num_markers = in.to_count(in.tokens()[3], header);
+  if (dim != 3) in.fail("dimension must be 3, found " + std::to_string(dim));
+  if (num_markers > 1)
+    in.fail("#boundary markers must be 0 or 1, found " + std::to_string(num_markers));
+
+  TetgenNodes nodes;
+  static constexpr const char* kAxis[] = {"x", "y", "z"};
+  for (Index i = 0; i < count; ++i) {
+    if (!in.next()) {
+      in.fail("file ends after " + std::to_string(i) + " of the " + std::to_string(count) +
+              " points announced in the header");
+    }
+    const auto& t = in.tokens();
+    const long long number = in.to_integer(t[0], [] { return "a point number"; });
+    in.expect_tokens(4 + num_attributes + num_markers,
+                     [&] { return "node " + std::to_string(number); });
+    if (i == 0) {
+      if (number != 0 && number != 1) {
+        in.fail("the first point must be numbered 0 or 1, found " + std::to_string(number));
+      }
+      nodes.first = number;
+    } else if (number != nodes.first + i) {
+      in.fail("expected point number " + std::to_string(nodes.first + i) + ", found " +
+              std::to_string(number));
+    }
+    for (int k = 0; k < 3; ++k) {
+      nodes.xyz.push_back(in.to_double(t[1 + k], [&] {
+        return std::string(kAxis[k]) + " coordinate of node " + std::to_string(number);
+      }));
+    }
+  }
+  if (in.next())
+    in.fail("unexpected content after the " + std::to_string(count) +
+            " points announced in the header");
+  return nodes;
+}
+
+}  // namespace
+
+LoadedMesh read_tetgen(const std::string& path) {
+  const std::string base = without_extension(path);
+  const TetgenNodes nodes = read_node_file(base + ".node");
+  const long long num_nodes = static_cast<long long>(nodes.xyz.size() / 3);
+
+  // NAME.ele: "#tets nodes-per-tet #attributes", then "number n0 n1 n2 n3 [attributes]" per tet.
+  MeshSource source;
+  source.file = base + ".ele";  // node_line stays empty: coordinates were checked when read
+  LineReader in(source.file, '#');
+  const auto header = [] { return "the header (#tetrahedra nodes-per-tetrahedron #attributes)"; };
+  if (!in.next()) in.fail("file is empty; expected " + std::string(header()));
+  in.expect_tokens(3, header);
+  const Index count = in.to_count(in.tokens()[0], header);
+  const Index nodes_per_tet = in.to_count(in.tokens()[1], header);
+  const Index num_attributes = in.to_count(in.tokens()[2], header);
+  if (nodes_per_tet == 10) in.fail("10-node (quadratic) tetrahedra are not supported");
+  if (nodes_per_tet != 4)
+    in.fail("nodes per tetrahedron must be 4, found " + std::to_string(nodes_per_tet));
+
+  std::vector<Index> tets;
+  for (Index i = 0; i < count; ++i) {
+    if (!in.next()) {
+      in.fail("file ends after " + std::to_string(i) + " of the " + std::to_string(count) +
+              " tetrahedra announced in the header");
+    }
+    const auto& t = in.tokens();
+    const long long number = in.to_integer(t[0], [] { return "a tetrahedron number"; });
+    const auto tet = [&] { return "tetrahedron " + std::to_string(number); };
+    in.expect_tokens(5 + num_attributes, tet);
+    for (int k = 0; k < 4; ++k) {
+      const long long node = in.to_integer(t[1 + k], [&] { return "a node of " + tet(); });
+      if (node < nodes.first || node >= nodes.first + num_nodes) {
+        in.fail(tet() + " references node " + std::to_string(node) + ", which is not defined (" +
+                base + ".node numbers its points " + std::to_string(nodes.first) + ".." +
+                std::to_string(nodes.first + num_nodes - 1) + ")");
+      }
+      tets.push_back(static_cast<Index>(node - nodes.first));
+    }
+    source.tet_line.push_back(in.line());
+  }
+  if (in.next())
+    in.fail("unexpected content after the " + std::to_string(count) +
+            " tetrahedra announced in the header");
+  return finish_loaded_mesh(nodes.xyz, tets, source);
+}
+
+}  // namespace depthfem

@@ -1,0 +1,150 @@
+#include "integrators/elasticity.hpp"
+
+#include <tbb/parallel_reduce.h>
+
+#include <functional>
+#include <stdexcept>
+
+#include "core/error.hpp"
+#include "integrators/tet_kernel.hpp"
+
+namespace depthfem {
+
+namespace {
+
+constexpr Index kGrain = 128;  // elements per task; fixed so that energy sums are reproducible
+
+inline Mat3 edge_matrix(const Points& x, const TetIndices& nodes, Index e) {
+  const Index n0 = nodes(e, 0);
+  Mat3 Ds;
+  for (int a = 0; a < 3; ++a) {
+    const Index na = nodes(e, a + 1);
+    Ds.col(a) = Vec3(x(na, 0) - x(n0, 0), x(na, 1) - x(n0, 1), x(na, 2) - x(n0, 2));
+  }
+  return Ds;
+}
+
+inline Vec3 fiber_of(const TetBlock& b, Index e) {
+  return b.fiber.rows() ? Vec3(b.fiber.row(e).transpose()) : Vec3::UnitX();
+}
+
+// Runs rows [begin, end) of a block: energy sum, and scatter of gradient / Hessian.
+template <int kOrder, class M>
+double run_rows(const M& m, const TetBlock& b, const Index* scatter, const Points& x, Index begin,
+                Index end, VectorX* g, BlockSparseMatrix* H) {
+  return tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<Index>(begin, end, kGrain), 0.0,
+      [&](const tbb::blocked_range<Index>& r, double acc) {
+        TetLocal local;
+        for (Index e = r.begin(); e < r.end(); ++e) {
+          tet_local<kOrder>(m, edge_matrix(x, b.nodes, e), b.dm_inv(e), b.volume(e), fiber_of(b, e), local);
+          acc += local.energy;
+          if constexpr (kOrder >= 1) {
+            for (int a = 0; a < 4; ++a) g->segment<3>(3 * b.nodes(e, a)) += local.gradient.col(a);
+          }
+          if constexpr (kOrder >= 2) {
+            const Index* off = scatter + 16 * e;
+            for (int a = 0; a < 4; ++a)
+              for (int c = 0; c < 4; ++c)
+                H->add_block(off[4 * a + c], b.nodes(e, a), local.hessian.block<3, 3>(3 * a, 3 * c));
+          }
+        }
+        return acc;
+      },
+      std::plus<double>());
+}
+
+template <int kOrder, class M>
+double run_group(const M& m, const TetBlock& b, const Index* scatter, const Points& x, VectorX* g,
+                 BlockSparseMatrix* H) {
+  if constexpr (kOrder == 0) {
+    return run_rows<0>(m, b, scatter, x, 0, b.size(), g, H);
+  } else {
+    // Colors in order; within a color no two rows share a node, so scattering is race-free.
+    double total = 0;
+    for (Index c = 0; c < b.num_colors(); ++c)
+      total += run_rows<kOrder>(m, b, scatter, x, b.color_begin[c], b.color_begin[c + 1], g, H);
+    return total;
+  }
+}
+
+}  // namespace
+
+Elasticity::Elasticity(const Points& X, const TetIndices& tets, std::vector<ElasticGroup> groups) {
+  for (size_t i = 0; i < groups.size(); ++i) {
+    ElasticGroup& in = groups[i];
+    try {
+      validate_material(in.material);
+    } catch (const std::invalid_argument& e) {
+      throw InputError("material group " + std::to_string(i) + ": " + e.what());
+    }
+    if (material_uses_fiber(in.material) && in.fibers.rows() == 0) {
+      throw InputError("material group " + std::to_string(i) + " (" + material_name(in.material) +
+                       ") needs a fiber direction per tet");
+    }
+    for (Index t : in.tets) {
+      if (t < 0 || t >= tets.rows()) {
+        throw InputError("material group " + std::to_string(i) + " lists tet " + std::to_string(t) +
+                         ", outside 0.." + std::to_string(tets.rows() - 1));
+      }
+    }
+    groups_.push_back({in.material, make_tet_block(X, tets, in.tets, in.fibers), {}});
+  }
+}
+
+void Elasticity::add_couplings(SparsityBuilder& builder) const {
+  for (const Group& grp : groups_) {
+    for (Index e = 0; e < grp.block.size(); ++e) {
+      const Index n[4] = {grp.block.nodes(e, 0), grp.block.nodes(e, 1), grp.block.nodes(e, 2),
+                          grp.block.nodes(e, 3)};
+      builder.add_clique(n);
+    }
+  }
+}
+
+void Elasticity::bind(const BlockSparseMatrix& H) {
+  for (Group& grp : groups_) {
+    const TetBlock& b = grp.block;
+    grp.scatter.resize(16 * static_cast<size_t>(b.size()));
+    for (Index e = 0; e < b.size(); ++e)
+      for (int a = 0; a < 4; ++a)
+        for (int c = 0; c < 4; ++c) {
+          const Index off = H.block_offset(b.nodes(e, a), b.nodes(e, c));
+          if (off < 0) throw std::logic_error("elasticity: Hessian pattern lacks a tet coupling");
+          grp.scatter[16 * e + 4 * a + c] = off;
+        }
+  }
+}
+
+double Elasticity::evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const {
+  if (hessian && !gradient) throw std::logic_error("elasticity: a Hessian needs a gradient too");
+  double total = 0;
+  for (const Group& grp : groups_) {
+    if (hessian && grp.scatter.empty()) throw std::logic_error("elasticity: bind() the Hessian first");
+    total += std::visit(
+        [&](const auto& m) {
+          if (hessian) return run_group<2>(m, grp.block, grp.scatter.data(), x, gradient, hessian);
+          if (gradient) return run_group<1>(m, grp.block, nullptr, x, gradient, nullptr);
+          return run_group<0>(m, grp.block, nullptr, x, nullptr, nullptr);
+        },
+        grp.material);
+  }
+  return total;
+}
+
+Index Elasticity::first_inverted(const Points& x) const {
+  for (const Group& grp : groups_) {
+    const TetBlock& b = grp.block;
+    for (Index e = 0; e < b.size(); ++e)
+      if (!(edge_matrix(x, b.nodes, e).determinant() > 0)) return b.tet(e);
+  }
+  return -1;
+}
+
+Index Elasticity::num_tets() const {
+  Index n = 0;
+  for (const Group& grp : groups_) n += grp.block.size();
+  return n;
+}
+
+}  // namespace depthfem

@@ -1,0 +1,52 @@
+#pragma once
+/// Strain invariants that every depthfem material is written in, and their F-derivatives.
+///
+/// With C = F^T F:  I1 = tr C,  I2 = (I1^2 - tr C^2) / 2,  J = det F (so I3 = det C = J^2),
+/// I4 = f^T C f = |F f|^2 (squared fiber stretch along the unit reference direction f).
+/// Using J instead of I3 keeps ln I3 = 2 ln J exact and the Hessian of J free of F^-1.
+
+#include <Eigen/Core>
+
+namespace depthfem {
+
+using Vec9 = Eigen::Matrix<double, 9, 1>;
+/// 9x9 matrices act on vec(F), column-major: vec index of F(i, j) is i + 3 j.
+using Mat9 = Eigen::Matrix<double, 9, 9>;
+
+/// The four invariants of F (and a fiber direction).
+struct Invariants {
+  double I1 = 3, I2 = 3, J = 1, I4 = 1;
+};
+
+/// psi and its derivatives with respect to (I1, I2, J, I4); `d2` is symmetric.
+/// Entries a material does not depend on stay zero.
+struct InvariantDerivatives {
+  double psi = 0;
+  Eigen::Vector4d d = Eigen::Vector4d::Zero();
+  Eigen::Matrix4d d2 = Eigen::Matrix4d::Zero();
+};
+
+/// Slots of (I1, I2, J, I4) in InvariantDerivatives.
+enum InvariantSlot : int { kI1 = 0, kI2 = 1, kJ = 2, kI4 = 3 };
+
+/// Cofactor matrix dJ/dF = J F^-T, computed from cross products of the columns of F.
+inline Eigen::Matrix3d cofactor(const Eigen::Matrix3d& F) {
+  Eigen::Matrix3d c;
+  c.col(0) = F.col(1).cross(F.col(2));
+  c.col(1) = F.col(2).cross(F.col(0));
+  c.col(2) = F.col(0).cross(F.col(1));
+  return c;
+}
+
+/// I1, I2, J and (with a unit fiber direction `f`) I4 of F.
+inline Invariants invariants(const Eigen::Matrix3d& F, const Eigen::Vector3d& f) {
+  const Eigen::Matrix3d C = F.transpose() * F;
+  Invariants inv;
+  inv.I1 = C.trace();
+  inv.I2 = 0.5 * (inv.I1 * inv.I1 - C.squaredNorm());  // tr C^2 = |C|_F^2 as C is symmetric
+  inv.J = F.determinant();
+  inv.I4 = (F * f).squaredNorm();
+  return inv;
+}
+
+}  // namespace depthfem

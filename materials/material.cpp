@@ -1,0 +1,90 @@
+#include "materials/material.hpp"
+
+#include <stdexcept>
+
+namespace depthfem {
+
+namespace {
+void require(bool ok, const char* what) {
+  if (!ok) throw std::invalid_argument(what);
+}
+
+// A rest state is stable when the small-strain shear and bulk moduli are positive.
+void require_stable(const LinearizedModuli& m, const char* model) {
+  if (!(m.mu > 0) || !(m.bulk() > 0)) {
+    throw std::invalid_argument(std::string(model) + ": parameters give shear modulus " +
+                                std::to_string(m.mu) + " and bulk modulus " +
+                                std::to_string(m.bulk()) + "; both must be positive");
+  }
+}
+
+template <class T>
+struct Name;
+template <>
+struct Name<NeoHookean> {
+  static std::string get() { return "neo_hookean"; }
+};
+template <>
+struct Name<MooneyRivlin> {
+  static std::string get() { return "mooney_rivlin"; }
+};
+template <>
+struct Name<Veronda> {
+  static std::string get() { return "veronda"; }
+};
+template <>
+struct Name<NearlyIncompressibleMooneyRivlin> {
+  static std::string get() { return "nearly_incompressible_mooney_rivlin"; }
+};
+template <class Base>
+struct Name<FiberReinforced<Base>> {
+  static std::string get() { return "fiber_" + Name<Base>::get(); }
+};
+}  // namespace
+
+void NeoHookean::validate() const {
+  require(mu > 0, "neo_hookean: mu must be > 0");
+  require_stable(linearized_moduli(*this), "neo_hookean");
+}
+
+NeoHookean NeoHookean::from_youngs(double E, double nu) {
+  require(E > 0, "neo_hookean: Young's modulus must be > 0");
+  require(nu > -1 && nu < 0.5, "neo_hookean: Poisson's ratio must be in (-1, 0.5)");
+  return {E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))};
+}
+
+void MooneyRivlin::validate() const {
+  require(C1 >= 0 && C2 >= 0, "mooney_rivlin: C1 and C2 must be >= 0");
+  require(C1 + C2 > 0, "mooney_rivlin: C1 + C2 must be > 0");
+  require_stable(linearized_moduli(*this), "mooney_rivlin");
+}
+
+void Veronda::validate() const {
+  require(alpha > 0, "veronda: alpha must be > 0");
+  require(beta >= 0, "veronda: beta must be >= 0");
+  require_stable(linearized_moduli(*this), "veronda");
+}
+
+void NearlyIncompressibleMooneyRivlin::validate() const {
+  require(C1 >= 0 && C2 >= 0, "nearly_incompressible_mooney_rivlin: C1 and C2 must be >= 0");
+  require(C1 + C2 > 0, "nearly_incompressible_mooney_rivlin: C1 + C2 must be > 0");
+  require(kappa > 0, "nearly_incompressible_mooney_rivlin: kappa must be > 0");
+}
+
+std::string material_name(const MaterialModel& m) {
+  return std::visit([](const auto& x) { return Name<std::decay_t<decltype(x)>>::get(); }, m);
+}
+
+bool material_uses_fiber(const MaterialModel& m) {
+  return std::visit([](const auto& x) { return std::decay_t<decltype(x)>::kUsesFiber; }, m);
+}
+
+void validate_material(const MaterialModel& m) {
+  std::visit([](const auto& x) { x.validate(); }, m);
+}
+
+LinearizedModuli material_moduli(const MaterialModel& m) {
+  return std::visit([](const auto& x) { return linearized_moduli(x); }, m);
+}
+
+}  // namespace depthfem

@@ -1,0 +1,40 @@
+#pragma once
+/// Compressible Mooney-Rivlin material (paper section 3.3).
+
+#include <cmath>
+
+#include "materials/invariants.hpp"
+
+namespace depthfem {
+
+/// psi = C1 (I1-3) + C2 (I2-3) + a (I3-1) - (C1 + 2 C2 + a) ln I3, with I3 = J^2.
+/// The ln I3 coefficient makes the reference state stress-free and psi -> +inf as J -> 0.
+/// Small-strain shear modulus mu = 2 (C1 + C2).
+struct MooneyRivlin {
+  double C1 = 0;  ///< [Pa]
+  double C2 = 0;  ///< [Pa]
+  double a = 0;   ///< compressibility [Pa]
+
+  static constexpr bool kUsesI2 = true;
+  static constexpr bool kUsesFiber = false;
+
+  /// Throws std::invalid_argument unless C1, C2 >= 0, C1 + C2 > 0 and the rest state is stable.
+  void validate() const;
+
+  template <int kOrder>
+  InvariantDerivatives evaluate(const Invariants& inv) const {
+    // In J: a (J^2 - 1) - 2 k ln J, k = C1 + 2 C2 + a.
+    const double k = C1 + 2.0 * C2 + a;
+    InvariantDerivatives e;
+    e.psi = C1 * (inv.I1 - 3) + C2 * (inv.I2 - 3) + a * (inv.J * inv.J - 1) - 2.0 * k * std::log(inv.J);
+    if constexpr (kOrder >= 1) {
+      e.d(kI1) = C1;
+      e.d(kI2) = C2;
+      e.d(kJ) = 2.0 * a * inv.J - 2.0 * k / inv.J;
+    }
+    if constexpr (kOrder >= 2) e.d2(kJ, kJ) = 2.0 * a + 2.0 * k / (inv.J * inv.J);
+    return e;
+  }
+};
+
+}  // namespace depthfem
