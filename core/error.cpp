@@ -3,8 +3,10 @@
 namespace depthfem {
 
 std::string located(const std::string& file, long line, const std::string& what) {
-  if (line > 0) return file + ":" + std::to_string(line) + ": " + what;
-  return file + ": " + what;
+  std::string out = file;
+  if (line > 0) out.append(":").append(std::to_string(line));
+  out.append(": ").append(what);
+  return out;
 }
 
 }  // namespace depthfem

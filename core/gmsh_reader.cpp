@@ -125,7 +125,7 @@ void add_element(LineReader& in, MshContent& msh, long long tag, long long type,
     if (volume == std::end(kOtherVolumeTypes)) {
       in.fail(element() + " has unsupported element type " + std::to_string(type));
     }
-    in.fail(element() + " is a " + volume->name + " (type " + std::to_string(type) +
+    in.fail(element() + " has type " + std::to_string(type) + " (" + volume->name +
             "); only 4-node tetrahedra (type 4) are supported");
   }
   if (nodes.size() != 4) {
@@ -195,8 +195,9 @@ void read_nodes_v4(LineReader& in, MshContent& msh) {
     const Index dim = in.to_count(in.tokens()[0], block);
     const Index parametric = in.to_count(in.tokens()[2], block);
     const Index n = in.to_count(in.tokens()[3], block);
-    if (dim > 3 || parametric > 1)
-      in.fail("invalid node block header (dimension 0..3, parametric 0 or 1)");
+    if (dim > 3 || parametric > 1) {
+      in.fail("invalid node block header: dimension must be 0..3 and parametric 0 or 1");
+    }
     tags.clear();
     for (Index i = 0; i < n; ++i) {
       next_entry(in, "Nodes", "nodes", count, read);
@@ -262,17 +263,19 @@ LoadedMesh read_gmsh(const std::string& path) {
     if (head == "$Nodes") {
       if (msh.has_nodes) in.fail("second $Nodes section");
       msh.has_nodes = true;
-      if (version == MshVersion::v2_2)
+      if (version == MshVersion::v2_2) {
         read_nodes_v2(in, msh);
-      else
+      } else {
         read_nodes_v4(in, msh);
+      }
     } else if (head == "$Elements") {
       if (msh.has_elements) in.fail("second $Elements section");
       msh.has_elements = true;
-      if (version == MshVersion::v2_2)
+      if (version == MshVersion::v2_2) {
         read_elements_v2(in, msh);
-      else
+      } else {
         read_elements_v4(in, msh);
+      }
     } else if (head.starts_with('$') && !head.starts_with("$End") && in.tokens().size() == 1) {
       skip_section(in, std::string(head.substr(1)));
     } else {

@@ -29,8 +29,8 @@ Index Mesh::add_body(const std::string& name, const TetMesh& body) {
   append_rows(tets, TetIndices(body.tets.array() + b.first_node));
   append_rows(tris, TriIndices(faces.tris.array() + b.first_node));
   append_rows(tri_tet, IndexVector(faces.tet.array() + b.first_tet));
-  append_rows(tet_body, IndexVector::Constant(b.num_tets, id));
-  append_rows(tri_body, IndexVector::Constant(b.num_tris, id));
+  append_rows(tet_body, IndexVector(IndexVector::Constant(b.num_tets, id)));
+  append_rows(tri_body, IndexVector(IndexVector::Constant(b.num_tris, id)));
   bodies.push_back(b);
   return id;
 }

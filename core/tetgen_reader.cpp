@@ -16,6 +16,32 @@ std::string without_extension(const std::string& path) {
   return path;
 }
 
+// Reads the first line of a .node or .ele file, which must hold `n` non-negative integers.
+std::vector<Index> read_header(LineReader& in, size_t n, const char* layout) {
+  const auto what = [&] { return "the header (" + std::string(layout) + ")"; };
+  if (!in.next()) in.fail("file is empty; expected " + what());
+  in.expect_tokens(n, what);
+  std::vector<Index> header;
+  for (const std::string_view token : in.tokens()) header.push_back(in.to_count(token, what));
+  return header;
+}
+
+// Advances to record `i` of the `count` records (`noun`) announced in the header.
+void next_record(LineReader& in, Index i, Index count, const char* noun) {
+  if (!in.next()) {
+    in.fail("file ends after " + std::to_string(i) + " of the " + std::to_string(count) + " " +
+            noun + " announced in the header");
+  }
+}
+
+// Throws if anything but comments and blank lines follows the last record.
+void expect_file_end(LineReader& in, Index count, const char* noun) {
+  if (in.next()) {
+    in.fail("unexpected content after the " + std::to_string(count) + " " + noun +
+            " announced in the header");
+  }
+}
+
 // Coordinates of NAME.node, row-major, and the number of its first point (0 or 1).
 struct TetgenNodes {
   std::vector<double> xyz;
@@ -25,24 +51,18 @@ struct TetgenNodes {
 // "#points 3 #attributes #markers", then "number x y z [attributes] [marker]" per point.
 TetgenNodes read_node_file(const std::string& path) {
   LineReader in(path, '#');
-  const auto header = [] { return "the header (#points dimension #attributes #markers)"; };
-  if (!in.next()) in.fail("file is empty; expected " + std::string(header()));
-  in.expect_tokens(4, header);
-  const Index count = in.to_count(in.tokens()[0], header);
-  const Index dim = in.to_count(in.tokens()[1], header);
-  const Index num_attributes = in.to_count(in.tokens()[2], header);
-  const Index num_markers = in.to_count(in.tokens()[3], header);
-  if (dim != 3) in.fail("dimension must be 3, found " + std::to_string(dim));
-  if (num_markers > 1)
-    in.fail("#boundary markers must be 0 or 1, found " + std::to_string(num_markers));
+  const std::vector<Index> header =
+      read_header(in, 4, "#points dimension #attributes #boundary-markers");
+  const Index count = header[0], num_attributes = header[2], num_markers = header[3];
+  if (header[1] != 3) in.fail("dimension must be 3, found " + std::to_string(header[1]));
+  if (num_markers > 1) {
+    in.fail("#boundary-markers must be 0 or 1, found " + std::to_string(num_markers));
+  }
 
   TetgenNodes nodes;
   static constexpr const char* kAxis[] = {"x", "y", "z"};
   for (Index i = 0; i < count; ++i) {
-    if (!in.next()) {
-      in.fail("file ends after " + std::to_string(i) + " of the " + std::to_string(count) +
-              " points announced in the header");
-    }
+    next_record(in, i, count, "points");
     const auto& t = in.tokens();
     const long long number = in.to_integer(t[0], [] { return "a point number"; });
     in.expect_tokens(4 + num_attributes + num_markers,
@@ -62,9 +82,7 @@ TetgenNodes read_node_file(const std::string& path) {
       }));
     }
   }
-  if (in.next())
-    in.fail("unexpected content after the " + std::to_string(count) +
-            " points announced in the header");
+  expect_file_end(in, count, "points");
   return nodes;
 }
 
@@ -79,22 +97,17 @@ LoadedMesh read_tetgen(const std::string& path) {
   MeshSource source;
   source.file = base + ".ele";  // node_line stays empty: coordinates were checked when read
   LineReader in(source.file, '#');
-  const auto header = [] { return "the header (#tetrahedra nodes-per-tetrahedron #attributes)"; };
-  if (!in.next()) in.fail("file is empty; expected " + std::string(header()));
-  in.expect_tokens(3, header);
-  const Index count = in.to_count(in.tokens()[0], header);
-  const Index nodes_per_tet = in.to_count(in.tokens()[1], header);
-  const Index num_attributes = in.to_count(in.tokens()[2], header);
-  if (nodes_per_tet == 10) in.fail("10-node (quadratic) tetrahedra are not supported");
-  if (nodes_per_tet != 4)
-    in.fail("nodes per tetrahedron must be 4, found " + std::to_string(nodes_per_tet));
+  const std::vector<Index> header =
+      read_header(in, 3, "#tetrahedra nodes-per-tetrahedron #attributes");
+  const Index count = header[0], num_attributes = header[2];
+  if (header[1] == 10) in.fail("10-node (quadratic) tetrahedra are not supported");
+  if (header[1] != 4) {
+    in.fail("nodes per tetrahedron must be 4, found " + std::to_string(header[1]));
+  }
 
   std::vector<Index> tets;
   for (Index i = 0; i < count; ++i) {
-    if (!in.next()) {
-      in.fail("file ends after " + std::to_string(i) + " of the " + std::to_string(count) +
-              " tetrahedra announced in the header");
-    }
+    next_record(in, i, count, "tetrahedra");
     const auto& t = in.tokens();
     const long long number = in.to_integer(t[0], [] { return "a tetrahedron number"; });
     const auto tet = [&] { return "tetrahedron " + std::to_string(number); };
@@ -110,9 +123,7 @@ LoadedMesh read_tetgen(const std::string& path) {
     }
     source.tet_line.push_back(in.line());
   }
-  if (in.next())
-    in.fail("unexpected content after the " + std::to_string(count) +
-            " tetrahedra announced in the header");
+  expect_file_end(in, count, "tetrahedra");
   return finish_loaded_mesh(nodes.xyz, tets, source);
 }
 

@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <filesystem>
 
 #include "core/error.hpp"
 
@@ -42,7 +43,10 @@ std::optional<double> parse_finite_double(std::string_view token) {
 
 LineReader::LineReader(const std::string& path, char comment)
     : file_(path), comment_(comment), stream_(path) {
-  if (!stream_) throw InputError(located(file_, 0, "cannot open file"));
+  std::error_code ec;  // a directory opens as a stream but cannot be read
+  if (!stream_ || std::filesystem::is_directory(path, ec)) {
+    throw InputError(located(file_, 0, "cannot open file"));
+  }
 }
 
 bool LineReader::next() {

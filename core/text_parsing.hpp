@@ -47,8 +47,6 @@ class LineReader {
   const std::vector<std::string_view>& tokens() const { return tokens_; }
   /// Number of the current line (1-based); at end of file, the number of lines in the file.
   long line() const { return line_; }
-  /// The path as given to the constructor.
-  const std::string& file() const { return file_; }
 
   /// Throws InputError "FILE:LINE: WHAT" for the current line.
   [[noreturn]] void fail(const std::string& what) const;

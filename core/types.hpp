@@ -2,6 +2,7 @@
 /// Basic value types shared by every depthfem module.
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstdint>
 
 namespace depthfem {

@@ -1,5 +1,6 @@
 #include "integrators/elasticity.hpp"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
 #include <functional>

@@ -6,6 +6,7 @@
 /// Using J instead of I3 keeps ln I3 = 2 ln J exact and the Hessian of J free of F^-1.
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 namespace depthfem {
 

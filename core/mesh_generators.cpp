@@ -1,0 +1,102 @@
+#include "core/mesh_generators.hpp"
+
+#include <cmath>
+#include <functional>
+#include <numbers>
+#include <string>
+
+#include "core/error.hpp"
+
+namespace depthfem {
+
+namespace {
+
+// Splits every cell of an nx x ny x nz grid of nodes into 6 tets. `node(i, j, k)` maps grid
+// coordinates (i may wrap for periodic directions) to a node index.
+TetIndices kuhn_tets(int nx, int ny, int nz, const std::function<Index(int, int, int)>& node) {
+  // The 6 monotone lattice paths from corner (0,0,0) to (1,1,1), one per axis permutation.
+  static constexpr int kPerm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  TetIndices tets(6 * nx * ny * nz, 4);
+  Index t = 0;
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i)
+        for (const auto& perm : kPerm) {
+          int c[3] = {i, j, k};
+          tets(t, 0) = node(c[0], c[1], c[2]);
+          for (int s = 0; s < 3; ++s) {
+            ++c[perm[s]];
+            tets(t, s + 1) = node(c[0], c[1], c[2]);
+          }
+          ++t;
+        }
+  return tets;
+}
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw InputError(what);
+}
+
+}  // namespace
+
+TetMesh box_mesh(const BoxParams& p) {
+  const Eigen::Vector3i n = p.cells;
+  require(n.minCoeff() >= 1, "box: cells must be >= 1 along every axis");
+  require((p.hi - p.lo).minCoeff() > 0, "box: hi must exceed lo along every axis");
+  TetMesh m;
+  m.X.resize((n(0) + 1) * (n(1) + 1) * (n(2) + 1), 3);
+  const auto id = [&](int i, int j, int k) { return i + (n(0) + 1) * (j + (n(1) + 1) * k); };
+  for (int k = 0; k <= n(2); ++k)
+    for (int j = 0; j <= n(1); ++j)
+      for (int i = 0; i <= n(0); ++i) {
+        const Vec3 s(double(i) / n(0), double(j) / n(1), double(k) / n(2));
+        m.X.row(id(i, j, k)) = (p.lo.array() + s.array() * (p.hi - p.lo).array()).transpose();
+      }
+  m.tets = kuhn_tets(n(0), n(1), n(2), id);
+  validate_and_orient(m);
+  return m;
+}
+
+TetMesh tube_mesh(const TubeParams& p) {
+  require(p.inner_radius > 0 && p.outer_radius > p.inner_radius,
+          "tube: need 0 < inner_radius < outer_radius");
+  require(p.length > 0, "tube: length must be > 0");
+  require(p.cells_through_wall >= 1 && p.cells_along >= 1 && p.cells_around >= 3,
+          "tube: need cells_through_wall >= 1, cells_along >= 1, cells_around >= 3");
+  const int nr = p.cells_through_wall, nt = p.cells_around, nz = p.cells_along;
+  TetMesh m;
+  m.X.resize((nr + 1) * nt * (nz + 1), 3);
+  // Around the circumference the grid wraps: index it = nt is node it = 0.
+  const auto id = [&](int ir, int it, int iz) { return ir + (nr + 1) * ((it % nt) + nt * iz); };
+  for (int iz = 0; iz <= nz; ++iz)
+    for (int it = 0; it < nt; ++it)
+      for (int ir = 0; ir <= nr; ++ir) {
+        const double r = p.inner_radius + (p.outer_radius - p.inner_radius) * ir / nr;
+        const double th = 2 * std::numbers::pi * it / nt;
+        m.X.row(id(ir, it, iz)) = Vec3(r * std::cos(th), r * std::sin(th), p.length * iz / nz).transpose();
+      }
+  m.tets = kuhn_tets(nr, nt, nz, id);
+  validate_and_orient(m);
+  return m;
+}
+
+TetMesh ball_mesh(const BallParams& p) {
+  require(p.radius > 0, "ball: radius must be > 0");
+  require(p.cells_per_axis >= 1, "ball: cells_per_axis must be >= 1");
+  const int n = p.cells_per_axis;
+  TetMesh m = box_mesh({Vec3::Constant(-1), Vec3::Constant(1), Eigen::Vector3i::Constant(n)});
+  // Cube-to-ball map x' = x sqrt(1 - y^2/2 - z^2/2 + y^2 z^2/3) (and cyclic): smooth, one-to-one,
+  // and |x'| = 1 exactly on the cube's surface.
+  for (Index v = 0; v < m.X.rows(); ++v) {
+    const double x = m.X(v, 0), y = m.X(v, 1), z = m.X(v, 2);
+    const double x2 = x * x, y2 = y * y, z2 = z * z;
+    const Vec3 q(x * std::sqrt(1 - y2 / 2 - z2 / 2 + y2 * z2 / 3),
+                 y * std::sqrt(1 - z2 / 2 - x2 / 2 + z2 * x2 / 3),
+                 z * std::sqrt(1 - x2 / 2 - y2 / 2 + x2 * y2 / 3));
+    m.X.row(v) = (p.center + p.radius * q).transpose();
+  }
+  validate_and_orient(m);
+  return m;
+}
+
+}  // namespace depthfem

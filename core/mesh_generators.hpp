@@ -1,0 +1,42 @@
+#pragma once
+/// Structured tetrahedral meshes: box, tube (cylindrical shell) and ball.
+/// Each hexahedral cell is split into 6 tets along its main diagonal (Kuhn split); neighbouring
+/// cells then split their shared faces the same way, so the meshes are conforming.
+
+#include "core/tet_mesh.hpp"
+
+namespace depthfem {
+
+/// Axis-aligned box [lo, hi] with n cells along each axis.
+struct BoxParams {
+  Vec3 lo = Vec3::Zero();     ///< [m]
+  Vec3 hi = Vec3::Ones();     ///< [m]
+  Eigen::Vector3i cells{1, 1, 1};
+};
+
+/// Cylindrical shell around the z axis, z in [0, length].
+struct TubeParams {
+  double inner_radius = 0.5;  ///< [m], > 0
+  double outer_radius = 1.0;  ///< [m]
+  double length = 1.0;        ///< [m]
+  int cells_through_wall = 1;
+  int cells_around = 16;      ///< >= 3
+  int cells_along = 4;
+};
+
+/// Solid ball centred at `center`: a cube grid mapped smoothly onto the ball, so that boundary
+/// nodes lie exactly on the sphere.
+struct BallParams {
+  Vec3 center = Vec3::Zero();  ///< [m]
+  double radius = 1.0;         ///< [m]
+  int cells_per_axis = 4;      ///< cells along each axis of the underlying cube (>= 1)
+};
+
+/// Box mesh with (n+1)^3 nodes and 6 n^3 tets; node (i, j, k) has index i + (nx+1)(j + (ny+1) k).
+TetMesh box_mesh(const BoxParams& p);
+/// Tube mesh; throws InputError for non-positive sizes or radii out of order.
+TetMesh tube_mesh(const TubeParams& p);
+/// Ball mesh; throws InputError for a non-positive radius or resolution.
+TetMesh ball_mesh(const BallParams& p);
+
+}  // namespace depthfem

@@ -1,0 +1,129 @@
+// Generators and boundary extraction: exact volumes, closed outward surfaces, sphere nodes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <numbers>
+
+#include "core/boundary.hpp"
+#include "core/error.hpp"
+#include "core/mesh.hpp"
+#include "core/mesh_generators.hpp"
+
+namespace depthfem {
+namespace {
+
+double total_volume(const TetMesh& m) {
+  double v = 0;
+  for (Index t = 0; t < m.tets.rows(); ++t) {
+    const double vt = signed_volume(m.X.row(m.tets(t, 0)), m.X.row(m.tets(t, 1)), m.X.row(m.tets(t, 2)),
+                                    m.X.row(m.tets(t, 3)));
+    EXPECT_GT(vt, 0) << "tet " << t;
+    v += vt;
+  }
+  return v;
+}
+
+// Volume enclosed by a triangle surface by the divergence theorem: sum over faces of
+// (x0 . ((x1 - x0) x (x2 - x0))) / 6. Equals the mesh volume only for a closed, outward surface.
+double enclosed_volume(const Points& X, const TriIndices& F) {
+  double v = 0;
+  for (Index f = 0; f < F.rows(); ++f) {
+    const Vec3 a = X.row(F(f, 0)), b = X.row(F(f, 1)), c = X.row(F(f, 2));
+    v += a.dot((b - a).cross(c - a)) / 6;
+  }
+  return v;
+}
+
+// Every directed edge of a closed, consistently oriented surface appears once, its twin once.
+void expect_closed_oriented(const TriIndices& F) {
+  std::map<std::pair<Index, Index>, int> directed;
+  for (Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) ++directed[{F(f, k), F(f, (k + 1) % 3)}];
+  for (const auto& [edge, count] : directed) {
+    EXPECT_EQ(count, 1) << "edge " << edge.first << "-" << edge.second << " used twice in one direction";
+    EXPECT_EQ(directed.count({edge.second, edge.first}), 1u) << "edge without twin";
+  }
+}
+
+TEST(BoxMesh, CountsVolumeAndBoundary) {
+  const TetMesh m = box_mesh({Vec3(0, 0, 0), Vec3(2, 1, 0.5), Eigen::Vector3i(4, 3, 2)});
+  EXPECT_EQ(m.X.rows(), 5 * 4 * 3);
+  EXPECT_EQ(m.tets.rows(), 6 * 4 * 3 * 2);
+  EXPECT_NEAR(total_volume(m), 1.0, 1e-14);
+  const BoundaryFaces b = boundary_faces(m.tets);
+  // 2 triangles per boundary quad: 2 (4*3 + 4*2 + 3*2) quads.
+  EXPECT_EQ(b.tris.rows(), 2 * 2 * (12 + 8 + 6));
+  EXPECT_NEAR(enclosed_volume(m.X, b.tris), 1.0, 1e-14);
+  expect_closed_oriented(b.tris);
+  for (Index f = 0; f < b.tris.rows(); ++f) {  // each face belongs to its tet
+    for (int k = 0; k < 3; ++k) EXPECT_TRUE((m.tets.row(b.tet(f)).array() == b.tris(f, k)).any());
+  }
+}
+
+TEST(TubeMesh, VolumeIsThatOfThePolygonalShell) {
+  const TubeParams p{0.3, 0.5, 2.0, 2, 12, 5};
+  const TetMesh m = tube_mesh(p);
+  EXPECT_EQ(m.X.rows(), 3 * 12 * 6);
+  // A regular n-gon of circumradius r has area n/2 r^2 sin(2 pi / n).
+  const double n = 12, expected = n / 2 * std::sin(2 * std::numbers::pi / n) * (0.25 - 0.09) * 2.0;
+  EXPECT_NEAR(total_volume(m), expected, 1e-12);
+  const BoundaryFaces b = boundary_faces(m.tets);
+  expect_closed_oriented(b.tris);
+  EXPECT_NEAR(enclosed_volume(m.X, b.tris), expected, 1e-12);
+  for (Index v = 0; v < m.X.rows(); ++v) {
+    const double r = std::hypot(m.X(v, 0), m.X(v, 1));
+    EXPECT_TRUE(r > 0.3 - 1e-12 && r < 0.5 + 1e-12);
+  }
+}
+
+TEST(BallMesh, BoundaryNodesOnSphereAndVolumeConverges) {
+  double previous_error = 1;
+  for (int n : {2, 4, 8}) {
+    const TetMesh m = ball_mesh({Vec3(1, 2, 3), 0.5, n});
+    const BoundaryFaces b = boundary_faces(m.tets);
+    expect_closed_oriented(b.tris);
+    for (Index f = 0; f < b.tris.rows(); ++f)
+      for (int k = 0; k < 3; ++k)
+        EXPECT_NEAR((m.X.row(b.tris(f, k)) - Eigen::RowVector3d(1, 2, 3)).norm(), 0.5, 1e-14);
+    const double exact = 4.0 / 3 * std::numbers::pi * 0.125;
+    const double error = std::abs(total_volume(m) - exact) / exact;
+    EXPECT_LT(error, previous_error / 3) << "inscribed polyhedron volume error must drop ~h^2";
+    previous_error = error;
+  }
+  EXPECT_LT(previous_error, 0.02);
+}
+
+TEST(Generators, RejectBadParameters) {
+  EXPECT_THROW(box_mesh({Vec3::Zero(), Vec3::Ones(), Eigen::Vector3i(0, 1, 1)}), InputError);
+  EXPECT_THROW(box_mesh({Vec3::Ones(), Vec3::Zero(), Eigen::Vector3i(1, 1, 1)}), InputError);
+  EXPECT_THROW(tube_mesh({0.5, 0.4, 1, 1, 8, 1}), InputError);
+  EXPECT_THROW(tube_mesh({0.0, 0.4, 1, 1, 8, 1}), InputError);
+  EXPECT_THROW(tube_mesh({0.1, 0.4, 1, 1, 2, 1}), InputError);
+  EXPECT_THROW(ball_mesh({Vec3::Zero(), -1, 2}), InputError);
+}
+
+TEST(Mesh, BodiesAreAppendedWithOffsets) {
+  Mesh scene;
+  const TetMesh a = box_mesh({Vec3::Zero(), Vec3::Ones(), Eigen::Vector3i(1, 1, 1)});
+  const TetMesh b = ball_mesh({Vec3(3, 0, 0), 1, 2});
+  EXPECT_EQ(scene.add_body("a", a), 0);
+  EXPECT_EQ(scene.add_body("b", b), 1);
+  ASSERT_EQ(scene.bodies.size(), 2u);
+  const Body& bb = scene.bodies[1];
+  EXPECT_EQ(bb.first_node, a.X.rows());
+  EXPECT_EQ(bb.first_tet, a.tets.rows());
+  EXPECT_EQ(scene.num_nodes(), a.X.rows() + b.X.rows());
+  for (Index t = bb.first_tet; t < bb.first_tet + bb.num_tets; ++t) {
+    EXPECT_EQ(scene.tet_body(t), 1);
+    EXPECT_GE(scene.tets.row(t).minCoeff(), bb.first_node);
+  }
+  for (Index f = bb.first_tri; f < bb.first_tri + bb.num_tris; ++f) {
+    EXPECT_EQ(scene.tri_body(f), 1);
+    EXPECT_EQ(scene.tet_body(scene.tri_tet(f)), 1);
+  }
+  expect_closed_oriented(scene.tris);
+}
+
+}  // namespace
+}  // namespace depthfem
