@@ -1,5 +1,8 @@
 #include "core/block_sparse_matrix.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 
 namespace depthfem {
@@ -18,39 +21,51 @@ std::vector<std::pair<Index, Index>> SparsityBuilder::pairs() const {
 }
 
 BlockSparseMatrix::BlockSparseMatrix(const SparsityBuilder& builder) {
-  const Index n = builder.num_nodes();
   const std::vector<std::pair<Index, Index>> pairs = builder.pairs();
-  std::vector<Index> blocks_in_row(static_cast<size_t>(n), 0);
-  for (const auto& [i, j] : pairs) ++blocks_in_row[i];
-
-  A_.resize(3 * n, 3 * n);
-  A_.resizeNonZeros(9 * static_cast<Eigen::Index>(pairs.size()));
-  Index* outer = A_.outerIndexPtr();
-  Index* inner = A_.innerIndexPtr();
-  stride_.resize(static_cast<size_t>(n));
-  outer[0] = 0;
-  for (Index i = 0; i < n; ++i) {
-    stride_[i] = 3 * blocks_in_row[i];
-    for (int c = 0; c < 3; ++c) outer[3 * i + c + 1] = outer[3 * i + c] + stride_[i];
+  row_begin_.assign(static_cast<size_t>(builder.num_nodes()) + 1, 0);
+  col_.resize(pairs.size());
+  for (size_t k = 0; k < pairs.size(); ++k) {
+    ++row_begin_[pairs[k].first + 1];
+    col_[k] = pairs[k].second;
   }
-  size_t p = 0;
-  for (Index i = 0; i < n; ++i) {
-    for (Index k = 0; k < blocks_in_row[i]; ++k, ++p) {
-      const Index j = pairs[p].second;
-      for (int c = 0; c < 3; ++c)
-        for (int d = 0; d < 3; ++d) inner[outer[3 * i + c] + 3 * k + d] = 3 * j + d;
-    }
-  }
-  A_.coeffs().setZero();
+  for (Index i = 0; i < builder.num_nodes(); ++i) row_begin_[i + 1] += row_begin_[i];
+  values_.assign(9 * pairs.size(), 0.0);
 }
 
-Index BlockSparseMatrix::block_offset(Index i, Index j) const {
-  const Index begin = A_.outerIndexPtr()[3 * i];
-  const Index* first = A_.innerIndexPtr() + begin;
-  const Index* last = first + stride_[i];
-  const Index* it = std::lower_bound(first, last, 3 * j);
-  if (it == last || *it != 3 * j) return -1;
-  return begin + static_cast<Index>(it - first);
+Index BlockSparseMatrix::block_index(Index i, Index j) const {
+  const auto first = col_.begin() + row_begin_[i], last = col_.begin() + row_begin_[i + 1];
+  const auto it = std::lower_bound(first, last, j);
+  if (it == last || *it != j) return -1;
+  return static_cast<Index>(it - col_.begin());
+}
+
+void BlockSparseMatrix::multiply(const VectorX& x, VectorX& y) const {
+  y.resize(3 * num_nodes());
+  tbb::parallel_for(tbb::blocked_range<Index>(0, num_nodes(), 256), [&](const tbb::blocked_range<Index>& r) {
+    for (Index i = r.begin(); i < r.end(); ++i) {
+      Vec3 s = Vec3::Zero();
+      for (Index k = row_begin_[i]; k < row_begin_[i + 1]; ++k) s += block(k) * x.segment<3>(3 * col_[k]);
+      y.segment<3>(3 * i) = s;
+    }
+  });
+}
+
+VectorX BlockSparseMatrix::diagonal() const {
+  VectorX d(3 * num_nodes());
+  for (Index i = 0; i < num_nodes(); ++i) d.segment<3>(3 * i) = block(block_index(i, i)).diagonal();
+  return d;
+}
+
+Eigen::SparseMatrix<double> BlockSparseMatrix::to_sparse() const {
+  std::vector<Eigen::Triplet<double>> t;
+  t.reserve(values_.size());
+  for (Index i = 0; i < num_nodes(); ++i)
+    for (Index k = row_begin_[i]; k < row_begin_[i + 1]; ++k)
+      for (int c = 0; c < 3; ++c)
+        for (int d = 0; d < 3; ++d) t.emplace_back(3 * i + c, 3 * col_[k] + d, values_[9 * k + 3 * c + d]);
+  Eigen::SparseMatrix<double> A(3 * num_nodes(), 3 * num_nodes());
+  A.setFromTriplets(t.begin(), t.end());
+  return A;
 }
 
 }  // namespace depthfem

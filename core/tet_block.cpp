@@ -2,7 +2,7 @@
 
 #include <string>
 
-#include "core/element_coloring.hpp"
+#include "core/element_partition.hpp"
 #include "core/error.hpp"
 
 namespace depthfem {
@@ -16,8 +16,12 @@ TetBlock make_tet_block(const Points& X, const TetIndices& tets, std::span<const
                      std::to_string(n) + " elements");
   }
   TetIndices local(n, 4);
-  for (Index e = 0; e < n; ++e) local.row(e) = tets.row(which[e]);
-  const ElementColoring coloring = color_elements(local, static_cast<Index>(X.rows()));
+  Points centroids(n, 3);
+  for (Index e = 0; e < n; ++e) {
+    local.row(e) = tets.row(which[e]);
+    centroids.row(e) = 0.25 * (X.row(local(e, 0)) + X.row(local(e, 1)) + X.row(local(e, 2)) + X.row(local(e, 3)));
+  }
+  const ElementPartition part = partition_elements(local, static_cast<Index>(X.rows()), centroids);
 
   TetBlock b;
   b.nodes.resize(n, 4);
@@ -25,9 +29,10 @@ TetBlock make_tet_block(const Points& X, const TetIndices& tets, std::span<const
   b.volume.resize(n);
   b.tet.resize(n);
   if (has_fiber) b.fiber.resize(n, 3);
-  b.color_begin = coloring.begin;
+  b.chunk_begin = part.chunk_begin;
+  b.color_begin = part.color_begin;
   for (Index r = 0; r < n; ++r) {
-    const Index e = coloring.order[r];
+    const Index e = part.order[r];
     const Index t = which[e];
     b.nodes.row(r) = local.row(e);
     b.tet(r) = t;

@@ -13,8 +13,6 @@ namespace depthfem {
 
 namespace {
 
-constexpr Index kGrain = 128;  // elements per task; fixed so that energy sums are reproducible
-
 inline Mat3 edge_matrix(const Points& x, const TetIndices& nodes, Index e) {
   const Index n0 = nodes(e, 0);
   Mat3 Ds;
@@ -29,44 +27,45 @@ inline Vec3 fiber_of(const TetBlock& b, Index e) {
   return b.fiber.rows() ? Vec3(b.fiber.row(e).transpose()) : Vec3::UnitX();
 }
 
-// Runs rows [begin, end) of a block: energy sum, and scatter of gradient / Hessian.
+// Walks rows [begin, end) of a block in order: energy sum, and scatter of gradient / Hessian.
 template <int kOrder, class M>
 double run_rows(const M& m, const TetBlock& b, const Index* scatter, const Points& x, Index begin,
                 Index end, VectorX* g, BlockSparseMatrix* H) {
-  return tbb::parallel_deterministic_reduce(
-      tbb::blocked_range<Index>(begin, end, kGrain), 0.0,
-      [&](const tbb::blocked_range<Index>& r, double acc) {
-        TetLocal local;
-        for (Index e = r.begin(); e < r.end(); ++e) {
-          tet_local<kOrder>(m, edge_matrix(x, b.nodes, e), b.dm_inv(e), b.volume(e), fiber_of(b, e), local);
-          acc += local.energy;
-          if constexpr (kOrder >= 1) {
-            for (int a = 0; a < 4; ++a) g->segment<3>(3 * b.nodes(e, a)) += local.gradient.col(a);
-          }
-          if constexpr (kOrder >= 2) {
-            const Index* off = scatter + 16 * e;
-            for (int a = 0; a < 4; ++a)
-              for (int c = 0; c < 4; ++c)
-                H->add_block(off[4 * a + c], b.nodes(e, a), local.hessian.block<3, 3>(3 * a, 3 * c));
-          }
-        }
-        return acc;
-      },
-      std::plus<double>());
+  TetLocal local;
+  double energy = 0;
+  for (Index e = begin; e < end; ++e) {
+    tet_local<kOrder>(m, edge_matrix(x, b.nodes, e), b.dm_inv(e), b.volume(e), fiber_of(b, e), local);
+    energy += local.energy;
+    if constexpr (kOrder >= 1) {
+      for (int a = 0; a < 4; ++a) g->segment<3>(3 * b.nodes(e, a)) += local.gradient.col(a);
+    }
+    if constexpr (kOrder >= 2) {
+      const Index* off = scatter + 16 * e;
+      for (int a = 0; a < 4; ++a)
+        for (int c = 0; c < 4; ++c)
+          H->add_block(off[4 * a + c], local.hessian.block<3, 3>(3 * a, 3 * c));
+    }
+  }
+  return energy;
 }
 
+// Colors in order; the chunks of one color share no node and run concurrently, each walked in
+// order. Chunk energies are summed in a fixed tree (deterministic reduce, one chunk per leaf).
 template <int kOrder, class M>
 double run_group(const M& m, const TetBlock& b, const Index* scatter, const Points& x, VectorX* g,
                  BlockSparseMatrix* H) {
-  if constexpr (kOrder == 0) {
-    return run_rows<0>(m, b, scatter, x, 0, b.size(), g, H);
-  } else {
-    // Colors in order; within a color no two rows share a node, so scattering is race-free.
-    double total = 0;
-    for (Index c = 0; c < b.num_colors(); ++c)
-      total += run_rows<kOrder>(m, b, scatter, x, b.color_begin[c], b.color_begin[c + 1], g, H);
-    return total;
+  double total = 0;
+  for (Index c = 0; c < b.num_colors(); ++c) {
+    total += tbb::parallel_deterministic_reduce(
+        tbb::blocked_range<Index>(b.color_begin[c], b.color_begin[c + 1], 1), 0.0,
+        [&](const tbb::blocked_range<Index>& chunks, double acc) {
+          for (Index k = chunks.begin(); k < chunks.end(); ++k)
+            acc += run_rows<kOrder>(m, b, scatter, x, b.chunk_begin[k], b.chunk_begin[k + 1], g, H);
+          return acc;
+        },
+        std::plus<double>());
   }
+  return total;
 }
 
 }  // namespace
@@ -110,7 +109,7 @@ void Elasticity::bind(const BlockSparseMatrix& H) {
     for (Index e = 0; e < b.size(); ++e)
       for (int a = 0; a < 4; ++a)
         for (int c = 0; c < 4; ++c) {
-          const Index off = H.block_offset(b.nodes(e, a), b.nodes(e, c));
+          const Index off = H.block_index(b.nodes(e, a), b.nodes(e, c));
           if (off < 0) throw std::logic_error("elasticity: Hessian pattern lacks a tet coupling");
           grp.scatter[16 * e + 4 * a + c] = off;
         }

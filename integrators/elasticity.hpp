@@ -40,7 +40,7 @@ class Elasticity final : public ForceModule {
   struct Group {
     MaterialModel material;
     TetBlock block;
-    std::vector<Index> scatter;  ///< 16 block offsets per row: (a, b) at 16 e + 4 a + b
+    std::vector<Index> scatter;  ///< 16 block indices per row: (a, b) at 16 e + 4 a + b
   };
   std::vector<Group> groups_;
 };

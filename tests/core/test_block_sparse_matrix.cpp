@@ -2,10 +2,11 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <map>
 #include <set>
 
 #include "core/block_sparse_matrix.hpp"
-#include "core/element_coloring.hpp"
+#include "core/element_partition.hpp"
 #include "core/mesh_generators.hpp"
 
 namespace depthfem {
@@ -29,35 +30,49 @@ TEST(BlockSparseMatrix, ScatteredBlocksEqualDenseAssembly) {
         Mat3 B;
         for (int k = 0; k < 9; ++k) B(k) = u(rng);
         const Index i = m.tets(t, a), j = m.tets(t, b);
-        const Index off = A.block_offset(i, j);
-        ASSERT_GE(off, 0);
-        A.add_block(off, i, B);
+        const Index k = A.block_index(i, j);
+        ASSERT_GE(k, 0);
+        A.add_block(k, B);
         dense.block<3, 3>(3 * i, 3 * j) += B;
       }
-  EXPECT_EQ((Eigen::MatrixXd(A.matrix()) - dense).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ((Eigen::MatrixXd(A.to_sparse()) - dense).cwiseAbs().maxCoeff(), 0.0);
   // Uncoupled nodes: opposite corners of the box share no tet.
-  EXPECT_EQ(A.block_offset(0, n - 1), -1);
-  // Each row of node i holds 3 entries per coupled node, the diagonal included.
-  for (Index i = 0; i < n; ++i) EXPECT_EQ(A.row_stride(i) % 3, 0);
+  EXPECT_EQ(A.block_index(0, n - 1), -1);
+  // Product and diagonal against the dense matrix.
+  const VectorX x = VectorX::LinSpaced(3 * n, -1, 2);
+  VectorX y;
+  A.multiply(x, y);
+  EXPECT_LE((y - dense * x).cwiseAbs().maxCoeff(), 1e-13 * (dense * x).cwiseAbs().maxCoeff());
+  EXPECT_EQ((A.diagonal() - dense.diagonal()).cwiseAbs().maxCoeff(), 0.0);
 }
 
-TEST(ElementColoring, NoTwoElementsOfAColorShareANode) {
-  const TetMesh m = box_mesh({Vec3::Zero(), Vec3::Ones(), Eigen::Vector3i(4, 3, 3)});
-  const ElementColoring c = color_elements(m.tets, static_cast<Index>(m.X.rows()));
-  std::multiset<Index> seen(c.order.begin(), c.order.end());
+TEST(ElementPartition, ChunksOfAColorShareNoNodeAndEveryElementAppearsOnce) {
+  const TetMesh m = box_mesh({Vec3::Zero(), Vec3::Ones(), Eigen::Vector3i(6, 5, 4)});
+  Points centroids(m.tets.rows(), 3);
+  for (Index t = 0; t < m.tets.rows(); ++t) {
+    centroids.row(t).setZero();
+    for (int a = 0; a < 4; ++a) centroids.row(t) += 0.25 * m.X.row(m.tets(t, a));
+  }
+  const Index chunk = 16;
+  const ElementPartition p = partition_elements(m.tets, static_cast<Index>(m.X.rows()), centroids, chunk);
+  std::multiset<Index> seen(p.order.begin(), p.order.end());
   ASSERT_EQ(seen.size(), static_cast<size_t>(m.tets.rows()));
   for (Index t = 0; t < m.tets.rows(); ++t) EXPECT_EQ(seen.count(t), 1u);
-  for (Index k = 0; k < c.num_colors(); ++k) {
-    std::set<Index> nodes;
-    size_t expected = 0;
-    for (Index p = c.begin[k]; p < c.begin[k + 1]; ++p) {
-      for (int a = 0; a < 4; ++a) nodes.insert(m.tets(c.order[p], a));
-      expected += 4;
-      if (p > c.begin[k]) EXPECT_LT(c.order[p - 1], c.order[p]);  // original order kept
-    }
-    EXPECT_EQ(nodes.size(), expected) << "color " << k << " has elements sharing a node";
+  ASSERT_EQ(p.color_begin.back(), p.num_chunks());
+  for (Index k = 0; k < p.num_chunks(); ++k) EXPECT_LE(p.chunk_begin[k + 1] - p.chunk_begin[k], chunk);
+  for (Index c = 0; c < p.num_colors(); ++c) {
+    std::map<Index, Index> owner;  // node -> chunk that touched it in this color
+    for (Index k = p.color_begin[c]; k < p.color_begin[c + 1]; ++k)
+      for (Index q = p.chunk_begin[k]; q < p.chunk_begin[k + 1]; ++q)
+        for (int a = 0; a < 4; ++a) {
+          const auto [it, fresh] = owner.emplace(m.tets(p.order[q], a), k);
+          EXPECT_TRUE(fresh || it->second == k) << "color " << c << ": chunks " << it->second << " and " << k
+                                                << " share node " << it->first;
+        }
   }
-  EXPECT_LE(c.num_colors(), 64);
+  // Compact chunks need few colors (a chunk meets a bounded number of neighbours).
+  EXPECT_LE(p.num_colors(), 32);
+  EXPECT_GE(p.num_colors(), 2);
 }
 
 }  // namespace
