@@ -1,0 +1,53 @@
+#pragma once
+/// Strict reading of JSON objects: every key must be known, every value of the right type, and
+/// every error names the full key path ("bodies[0].material.C1: expected a number").
+
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "core/types.hpp"
+
+namespace depthfem {
+
+/// A JSON object being read. Keys read through it are marked; finish() rejects the rest.
+class JsonObject {
+ public:
+  /// `path` names the object in messages ("" for the root); `file` prefixes every message.
+  JsonObject(const nlohmann::json& j, std::string path, std::string file);
+
+  bool has(const std::string& key) const { return j_.contains(key); }
+  double number(const std::string& key);
+  double number(const std::string& key, double fallback);
+  int integer(const std::string& key);
+  int integer(const std::string& key, int fallback);
+  bool boolean(const std::string& key, bool fallback);
+  std::string string(const std::string& key);
+  std::string string(const std::string& key, const std::string& fallback);
+  Vec3 vec3(const std::string& key);
+  Vec3 vec3(const std::string& key, const Vec3& fallback);
+  Eigen::Vector3i int3(const std::string& key);
+  std::vector<Index> indices(const std::string& key);
+  JsonObject object(const std::string& key);
+  std::vector<JsonObject> objects(const std::string& key);
+  /// Marks a key as known without reading it (free-text fields such as "description").
+  void ignore(const std::string& key) { used_.insert(key); }
+
+  /// Throws InputError for the first key that was never read.
+  void finish() const;
+  /// An InputError "FILE: PATH.KEY: what".
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const;
+  const std::string& path() const { return path_; }
+
+ private:
+  const nlohmann::json& at(const std::string& key);
+  std::string key_path(const std::string& key) const;
+
+  const nlohmann::json& j_;
+  std::string path_, file_;
+  std::set<std::string> used_;
+};
+
+}  // namespace depthfem

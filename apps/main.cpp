@@ -1,0 +1,108 @@
+// The depthfem command line:
+//   depthfem run SCENE.json --out RESULT.h5 [--threads N] [--set PATH=VALUE]...
+//   depthfem info RESULT.h5
+// Exit code 0 only when the whole run succeeded; otherwise one line "depthfem: error: ..." on
+// stderr (2 for usage errors, 1 for input or solver errors).
+#include <cstdio>
+#include <exception>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "apps/run_scene.hpp"
+#include "core/results_file.hpp"
+
+namespace {
+
+constexpr const char* kUsage =
+    "usage: depthfem run SCENE.json --out RESULT.h5 [--threads N] [--set PATH=VALUE]...\n"
+    "       depthfem info RESULT.h5\n";
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+int run(const std::vector<std::string>& args) {
+  using namespace depthfem;
+  if (args.empty()) throw UsageError("run needs a scene file");
+  RunOptions options;
+  std::vector<Override> overrides;
+  std::string scene_path;
+  for (size_t i = 0; i < args.size(); ++i) {
+    const auto value = [&]() -> const std::string& {
+      if (i + 1 >= args.size()) throw UsageError(args[i] + " needs a value");
+      return args[++i];
+    };
+    if (args[i] == "--out") {
+      options.out = value();
+    } else if (args[i] == "--threads") {
+      const std::string& v = value();
+      try {
+        options.threads = std::stoi(v);
+      } catch (const std::exception&) {
+        throw UsageError("--threads expects a positive integer, got '" + v + "'");
+      }
+      if (options.threads < 1) throw UsageError("--threads expects a positive integer, got '" + v + "'");
+    } else if (args[i] == "--set") {
+      overrides.push_back(parse_override(value()));
+    } else if (args[i].rfind("--", 0) == 0) {
+      throw UsageError("unknown option " + args[i]);
+    } else if (scene_path.empty()) {
+      scene_path = args[i];
+    } else {
+      throw UsageError("unexpected argument " + args[i]);
+    }
+  }
+  if (scene_path.empty()) throw UsageError("run needs a scene file");
+  if (options.out.empty()) throw UsageError("run needs --out RESULT.h5");
+  const Scene scene = load_scene(scene_path, overrides);
+  const RunResult r = run_scene(scene, options, std::cout);
+  print_timing(r.timers, r.seconds, std::cout);
+  if (!r.success) {
+    std::cerr << "depthfem: error: " << r.message << " (" << r.steps.size() << " completed steps kept in "
+              << options.out << ")\n";
+    return 1;
+  }
+  std::cout << "completed " << r.steps.size() << " steps in " << r.seconds << " s; results in " << options.out << "\n";
+  return 0;
+}
+
+int info(const std::vector<std::string>& args) {
+  using namespace depthfem;
+  if (args.size() != 1) throw UsageError("info needs exactly one results file");
+  const ResultsSummary s = read_results_summary(args[0]);
+  std::cout << args[0] << ": depthfem " << s.version << ", " << s.analysis << " analysis, " << s.threads << " threads\n"
+            << "  mesh: " << s.num_nodes << " nodes, " << s.num_tets << " tets, " << s.num_tris << " boundary triangles, "
+            << s.body_names.size() << " bodies:";
+  for (const std::string& b : s.body_names) std::cout << " " << b;
+  std::cout << "\n  steps: " << s.num_steps << ", last load/time " << s.last_load << ", Newton iterations "
+            << s.total_newton_iterations << ", linear iterations " << s.total_linear_iterations << "\n"
+            << "  status: " << s.status << (s.message.empty() ? "" : " (" + s.message + ")") << "\n";
+  if (!s.timing.empty()) {
+    std::cout << "  timing:\n";
+    for (const auto& [phase, sec] : s.timing) std::printf("    %-36s %10.3f s\n", phase.c_str(), sec);
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::vector<std::string> args(argv + 1, argv + argc);
+  try {
+    if (args.empty() || args[0] == "--help" || args[0] == "-h") {
+      std::cout << kUsage;
+      return args.empty() ? 2 : 0;
+    }
+    const std::vector<std::string> rest(args.begin() + 1, args.end());
+    if (args[0] == "run") return run(rest);
+    if (args[0] == "info") return info(rest);
+    throw UsageError("unknown command '" + args[0] + "'");
+  } catch (const UsageError& e) {
+    std::cerr << "depthfem: error: " << e.what() << "\n" << kUsage;
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "depthfem: error: " << e.what() << "\n";
+    return 1;
+  }
+}

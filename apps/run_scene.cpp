@@ -1,0 +1,123 @@
+#include "apps/run_scene.hpp"
+
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "core/error.hpp"
+#include "core/lumped_mass.hpp"
+#include "core/results_file.hpp"
+#include "integrators/gravity.hpp"
+
+namespace depthfem {
+
+namespace {
+
+constexpr const char* kVersion = "0.1.0";
+
+// Newton tolerance [N]: relative tolerance x elastic force scale E h^2 x sqrt(#dofs), i.e. a
+// bound on the root-mean-square nodal residual relative to the force of unit strain on one cell.
+double newton_tolerance(const Scene& scene) {
+  double E = 0;
+  for (const ElasticGroup& g : scene.groups) E = std::max(E, material_moduli(g.material).youngs());
+  const double h = mean_edge_length(scene.mesh.X, scene.mesh.tets);
+  return scene.tolerance * E * h * h * std::sqrt(3.0 * scene.mesh.num_nodes());
+}
+
+std::string format(const char* fmt, auto... args) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, fmt, args...);
+  return buf;
+}
+
+}  // namespace
+
+void print_timing(const PhaseTimers& timers, double total, std::ostream& out) {
+  out << "timing (s, share of " << format("%.3f", total) << " s wall):\n";
+  double grouped[3] = {0, 0, 0};
+  const char* groups[3] = {"force/stiffness", "collision detection", "linear solve"};
+  for (const auto& [name, sec] : timers.phases()) {
+    out << format("  %-36s %10.3f  %5.1f %%\n", name.c_str(), sec, total > 0 ? 100 * sec / total : 0.0);
+    for (int k = 0; k < 3; ++k)
+      if (name.rfind(groups[k], 0) == 0) grouped[k] += sec;
+  }
+  double rest = total;
+  for (int k = 0; k < 3; ++k) {
+    out << format("  = %-34s %10.3f  %5.1f %%\n", groups[k], grouped[k], total > 0 ? 100 * grouped[k] / total : 0.0);
+    rest -= grouped[k];
+  }
+  out << format("  = %-34s %10.3f  %5.1f %%\n", "other", rest, total > 0 ? 100 * rest / total : 0.0);
+}
+
+RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream& log) {
+  const int threads = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+  const auto start = std::chrono::steady_clock::now();
+
+  RunResult result;
+  const Mesh& mesh = scene.mesh;
+  System system(mesh.num_nodes(), result.timers);
+  system.add(std::make_unique<Elasticity>(mesh.X, mesh.tets, scene.groups));
+  if (scene.gravity.norm() > 0) {
+    system.add(std::make_unique<Gravity>(lumped_mass(mesh.X, mesh.tets, scene.tet_density), scene.gravity));
+  }
+  NodalSpring* viscosity = nullptr;
+  if (scene.quasi_viscosity > 0) {
+    viscosity = &system.add(std::make_unique<NodalSpring>(
+        "quasi-viscosity", quasi_viscosity_stiffness(mesh.X, mesh.tets, scene.quasi_viscosity)));
+  }
+  const Constraints constraints(mesh.X, scene.constraints);
+  StaticOptions opt = scene.static_options;
+  opt.newton.tolerance = newton_tolerance(scene);
+
+  std::unique_ptr<ResultsFile> file;
+  if (!options.out.empty()) {
+    RunInfo info{scene.json_text, kVersion, scene.analysis, threads, {}};
+    for (const Constraint& c : scene.constraints) info.constraint_names.push_back(c.name);
+    file = std::make_unique<ResultsFile>(options.out, mesh, VectorX(), info);
+  }
+  log << "scene " << scene.name << ": " << mesh.num_nodes() << " nodes, " << mesh.num_tets() << " tets, "
+      << mesh.bodies.size() << " bodies, " << threads << " threads, linear solver "
+      << to_string(opt.newton.linear.kind) << ", Newton tolerance " << format("%.3g", opt.newton.tolerance) << " N\n";
+
+  result.x = mesh.X;
+  StaticSolver solver(system, constraints, viscosity, opt);
+  try {
+    solver.run(result.x, [&](const StaticStep& s) {
+      StepSummary sum{s.load, s.newton.iterations, s.newton.linear_iterations, s.newton.energy,
+                      s.newton.residuals.back(), constraints.reactions(s.gradient)};
+      log << format("step %4d  load %.4f%s  newton %2d  linear %5d  residual %.3e  energy % .6e  %.2f s\n",
+                    int(s.index), s.load, s.settling ? " (settle)" : "", sum.newton_iterations,
+                    sum.linear_iterations, sum.residual, sum.energy, s.seconds);
+      if (file) {
+        StepRecord rec;
+        rec.index = s.index;
+        rec.load = s.load;
+        rec.x = s.x;
+        rec.newton_iterations = sum.newton_iterations;
+        rec.linear_iterations = sum.linear_iterations;
+        rec.energy = sum.energy;
+        rec.seconds = s.seconds;
+        rec.residuals = s.newton.residuals;
+        rec.reactions = sum.reactions;
+        file->append_step(rec);
+      }
+      result.steps.push_back(std::move(sum));
+    });
+    result.success = true;
+  } catch (const SolveError& e) {
+    result.message = e.what();
+  }
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (file) {
+    file->write_timing(result.timers.phases());
+    file->finish(result.success, result.message);
+  }
+  return result;
+}
+
+}  // namespace depthfem

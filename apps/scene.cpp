@@ -1,0 +1,256 @@
+#include "apps/scene.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+
+#include "apps/json_reader.hpp"
+#include "core/error.hpp"
+#include "core/mesh_file.hpp"
+#include "core/mesh_generators.hpp"
+#include "core/node_sets.hpp"
+
+namespace depthfem {
+
+namespace {
+
+using nlohmann::json;
+
+TetMesh read_body_mesh(JsonObject m, const std::string& scene_dir) {
+  TetMesh mesh;
+  if (m.has("file")) {
+    std::filesystem::path p = m.string("file");
+    if (p.is_relative()) p = std::filesystem::path(scene_dir) / p;
+    mesh = read_tet_mesh(p.string()).mesh;
+    mesh.X *= m.number("scale", 1.0);
+  } else {
+    const std::string gen = m.string("generator");
+    if (gen == "box") {
+      mesh = box_mesh({m.vec3("lo"), m.vec3("hi"), m.int3("cells")});
+    } else if (gen == "tube") {
+      mesh = tube_mesh({m.number("inner_radius"), m.number("outer_radius"), m.number("length"),
+                        m.integer("cells_through_wall"), m.integer("cells_around"), m.integer("cells_along")});
+    } else if (gen == "ball") {
+      mesh = ball_mesh({m.vec3("center", Vec3::Zero()), m.number("radius"), m.integer("cells_per_axis")});
+    } else {
+      m.fail("generator", "unknown generator '" + gen + "' (expected box, tube or ball)");
+    }
+  }
+  mesh.X.rowwise() += m.vec3("translate", Vec3::Zero()).transpose();
+  m.finish();
+  return mesh;
+}
+
+// Material parameters by model name; the keys are those of the model's struct.
+MaterialModel read_material(JsonObject m, Vec3& fiber_direction) {
+  const std::string model = m.string("model");
+  MaterialModel out;
+  const auto mooney = [&] { return MooneyRivlin{m.number("C1"), m.number("C2"), m.number("a")}; };
+  const auto veronda = [&] { return Veronda{m.number("alpha"), m.number("beta"), m.number("a")}; };
+  if (model == "neo_hookean") {
+    out = m.has("youngs") ? NeoHookean::from_youngs(m.number("youngs"), m.number("poisson"))
+                          : NeoHookean{m.number("mu"), m.number("lambda")};
+  } else if (model == "mooney_rivlin") {
+    out = mooney();
+  } else if (model == "veronda") {
+    out = veronda();
+  } else if (model == "nearly_incompressible_mooney_rivlin") {
+    out = NearlyIncompressibleMooneyRivlin{m.number("C1"), m.number("C2"), m.number("kappa")};
+  } else if (model == "fiber_mooney_rivlin") {
+    out = FiberReinforced<MooneyRivlin>{mooney(), m.number("fiber_alpha"), m.number("fiber_beta")};
+  } else if (model == "fiber_veronda") {
+    out = FiberReinforced<Veronda>{veronda(), m.number("fiber_alpha"), m.number("fiber_beta")};
+  } else {
+    m.fail("model", "unknown material model '" + model +
+                        "' (expected neo_hookean, mooney_rivlin, veronda, nearly_incompressible_mooney_rivlin, "
+                        "fiber_mooney_rivlin or fiber_veronda)");
+  }
+  if (material_uses_fiber(out)) fiber_direction = m.vec3("fiber_direction");
+  try {
+    validate_material(out);
+  } catch (const std::invalid_argument& e) {
+    m.fail("model", e.what());
+  }
+  m.finish();
+  return out;
+}
+
+std::vector<Index> read_node_set(JsonObject s, const Mesh& mesh) {
+  const double tol = s.number("tolerance", 1e-9);
+  std::vector<Index> nodes;
+  int kinds = 0;
+  if (s.has("box")) {
+    JsonObject b = s.object("box");
+    nodes = nodes_in_box(mesh.X, b.vec3("lo"), b.vec3("hi"), tol);
+    b.finish();
+    ++kinds;
+  }
+  if (s.has("plane")) {
+    JsonObject p = s.object("plane");
+    nodes = nodes_on_plane(mesh.X, p.vec3("normal"), p.number("offset", 0.0), tol);
+    p.finish();
+    ++kinds;
+  }
+  if (s.has("list")) {
+    nodes = s.indices("list");
+    ++kinds;
+  }
+  if (s.has("body")) {
+    const std::string name = s.string("body");
+    Index id = -1;
+    for (size_t b = 0; b < mesh.bodies.size(); ++b)
+      if (mesh.bodies[b].name == name) id = static_cast<Index>(b);
+    if (id < 0) s.fail("body", "no body named '" + name + "'");
+    nodes = nodes_of_body(mesh, id);
+    ++kinds;
+  }
+  if (kinds != 1) s.fail("", "give exactly one of box, plane, list or body");
+  if (nodes.empty()) s.fail("", "selects no nodes");
+  s.finish();
+  return nodes;
+}
+
+Constraint read_constraint(JsonObject c, const Mesh& mesh, size_t index) {
+  Constraint out;
+  const std::string type = c.string("type");
+  out.name = c.string("name", type + "_" + std::to_string(index));
+  out.nodes = read_node_set(c.object("nodes"), mesh);
+  if (type == "fixed") {
+    out.kind = Fixed{};
+  } else if (type == "displaced") {
+    out.kind = Displaced{c.vec3("displacement")};
+  } else if (type == "rotated") {
+    out.kind = Rotated{c.vec3("axis"), c.vec3("center"), c.number("angle_deg") * std::numbers::pi / 180,
+                       c.vec3("translation", Vec3::Zero())};
+  } else if (type == "plane") {
+    out.kind = InPlane{c.vec3("normal"), c.number("offset", 0.0)};
+  } else if (type == "line") {
+    out.kind = OnLine{c.vec3("direction")};
+  } else {
+    c.fail("type", "unknown boundary condition '" + type + "' (expected fixed, displaced, rotated, plane or line)");
+  }
+  c.finish();
+  return out;
+}
+
+void read_solver(JsonObject s, Scene& scene) {
+  StaticOptions& o = scene.static_options;
+  try {
+    o.newton.linear.kind = parse_linear_solver(s.string("linear_solver", "direct"));
+  } catch (const std::invalid_argument& e) {
+    s.fail("linear_solver", e.what());
+  }
+  o.newton.linear.tolerance = s.number("linear_tolerance", o.newton.linear.tolerance);
+  o.newton.linear.max_iterations = s.integer("linear_max_iterations", o.newton.linear.max_iterations);
+  o.newton.max_iterations = s.integer("max_newton_iterations", o.newton.max_iterations);
+  o.newton.max_line_search = s.integer("max_line_search", o.newton.max_line_search);
+  const std::string rule = s.string("line_search", "energy");
+  if (rule == "energy") {
+    o.newton.line_search = LineSearchRule::kEnergy;
+  } else if (rule == "residual") {
+    o.newton.line_search = LineSearchRule::kResidual;
+  } else {
+    s.fail("line_search", "unknown rule '" + rule + "' (expected energy or residual)");
+  }
+  o.initial_increment = s.number("initial_increment", o.initial_increment);
+  o.min_increment = s.number("min_increment", o.min_increment);
+  o.max_increment = s.number("max_increment", o.max_increment);
+  o.predictor = s.boolean("predictor", o.predictor);
+  o.max_settle_steps = s.integer("max_settle_steps", o.max_settle_steps);
+  scene.quasi_viscosity = s.number("quasi_viscosity", 0.0);
+  scene.tolerance = s.number("tolerance", scene.tolerance);
+  if (!(o.min_increment > 0 && o.min_increment <= o.initial_increment && o.initial_increment <= 1 &&
+        o.max_increment >= o.initial_increment)) {
+    s.fail("", "need 0 < min_increment <= initial_increment <= max_increment and initial_increment <= 1");
+  }
+  if (!(o.newton.linear.tolerance > 0 && o.newton.linear.tolerance < 1)) s.fail("linear_tolerance", "must be in (0, 1)");
+  if (o.newton.max_iterations < 1) s.fail("max_newton_iterations", "must be >= 1");
+  if (scene.quasi_viscosity < 0) s.fail("quasi_viscosity", "must be >= 0");
+  if (!(scene.tolerance > 0)) s.fail("tolerance", "must be > 0");
+  s.finish();
+}
+
+// Sets the value at a dotted path, creating objects on the way.
+void apply_override(json& root, const Override& o, const std::string& file) {
+  json* node = &root;
+  std::stringstream ss(o.path);
+  std::string seg;
+  while (std::getline(ss, seg, '.')) {
+    const bool numeric = !seg.empty() && seg.find_first_not_of("0123456789") == std::string::npos;
+    if (numeric && node->is_array()) {
+      const size_t k = std::stoul(seg);
+      if (k >= node->size()) throw InputError(file + ": --set " + o.path + ": index " + seg + " out of range");
+      node = &(*node)[k];
+    } else {
+      if (!node->is_object()) throw InputError(file + ": --set " + o.path + ": '" + seg + "' is not inside an object");
+      node = &(*node)[seg];
+    }
+  }
+  json value = json::parse(o.value, nullptr, false);
+  *node = value.is_discarded() ? json(o.value) : value;
+}
+
+}  // namespace
+
+Override parse_override(const std::string& text) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos || eq == 0) throw InputError("--set expects PATH=VALUE, got '" + text + "'");
+  return {text.substr(0, eq), text.substr(eq + 1)};
+}
+
+Scene load_scene(const std::string& path, const std::vector<Override>& overrides) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open scene file");
+  json root;
+  try {
+    root = json::parse(in);
+  } catch (const json::parse_error& e) {
+    throw InputError(path + ": invalid JSON: " + e.what());
+  }
+  for (const Override& o : overrides) apply_override(root, o, path);
+
+  Scene scene;
+  scene.file = path;
+  scene.json_text = root.dump(2);
+  JsonObject r(root, "", path);
+  scene.name = r.string("name", std::filesystem::path(path).stem().string());
+  r.ignore("description");
+  scene.analysis = r.string("analysis", "static");
+  if (scene.analysis != "static") r.fail("analysis", "unknown analysis '" + scene.analysis + "' (expected static)");
+  scene.gravity = r.vec3("gravity", Vec3::Zero());
+
+  const std::string dir = std::filesystem::path(path).parent_path().string();
+  std::vector<double> density;
+  for (JsonObject b : r.objects("bodies")) {
+    const std::string name = b.string("name");
+    for (const Body& existing : scene.mesh.bodies)
+      if (existing.name == name) b.fail("name", "duplicate body name '" + name + "'");
+    const TetMesh mesh = read_body_mesh(b.object("mesh"), dir);
+    Vec3 fiber = Vec3::UnitX();
+    const MaterialModel material = read_material(b.object("material"), fiber);
+    const double rho = b.number("density", 1000.0);
+    if (!(rho > 0)) b.fail("density", "must be > 0");
+    b.finish();
+    const Index id = scene.mesh.add_body(name, mesh);
+    const Body& body = scene.mesh.bodies[id];
+    ElasticGroup g{material, {}, Points()};
+    for (Index t = 0; t < body.num_tets; ++t) g.tets.push_back(body.first_tet + t);
+    if (material_uses_fiber(material)) g.fibers = fiber.transpose().replicate(body.num_tets, 1);
+    scene.groups.push_back(std::move(g));
+    density.insert(density.end(), static_cast<size_t>(body.num_tets), rho);
+  }
+  if (scene.mesh.bodies.empty()) r.fail("bodies", "a scene needs at least one body");
+  scene.tet_density = Eigen::Map<VectorX>(density.data(), static_cast<Eigen::Index>(density.size()));
+
+  if (r.has("boundary")) {
+    std::vector<JsonObject> list = r.objects("boundary");
+    for (size_t k = 0; k < list.size(); ++k) scene.constraints.push_back(read_constraint(list[k], scene.mesh, k));
+  }
+  if (r.has("solver")) read_solver(r.object("solver"), scene);
+  r.finish();
+  return scene;
+}
+
+}  // namespace depthfem

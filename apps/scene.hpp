@@ -1,0 +1,43 @@
+#pragma once
+/// Scene files: JSON describing bodies, materials, boundary conditions and solver options,
+/// mapped onto the option structs of the modules. Only apps/ knows the file format.
+
+#include <string>
+#include <vector>
+
+#include "core/mesh.hpp"
+#include "integrators/constraints.hpp"
+#include "integrators/elasticity.hpp"
+#include "integrators/static_solver.hpp"
+
+namespace depthfem {
+
+/// Everything a run needs, read and validated from a scene file.
+struct Scene {
+  std::string name;
+  std::string file;       ///< path it was read from
+  std::string json_text;  ///< the (possibly overridden) scene as JSON, stored in the results
+  std::string analysis = "static";
+  Mesh mesh;
+  std::vector<ElasticGroup> groups;   ///< one per body
+  VectorX tet_density;                ///< [kg/m^3] per tet
+  Vec3 gravity = Vec3::Zero();        ///< [m/s^2]
+  std::vector<Constraint> constraints;
+  double quasi_viscosity = 0;         ///< [Pa]; 0: off
+  double tolerance = 1e-9;            ///< relative Newton tolerance (see scene docs)
+  StaticOptions static_options;
+};
+
+/// A `--set path=value` override: path segments separated by '.', array indices as numbers,
+/// value parsed as JSON (a bare word is taken as a string).
+struct Override {
+  std::string path, value;
+};
+
+/// Reads, overrides and validates a scene. Throws InputError naming the file and key path.
+Scene load_scene(const std::string& path, const std::vector<Override>& overrides = {});
+
+/// Parses "path=value". Throws InputError for text without '='.
+Override parse_override(const std::string& text);
+
+}  // namespace depthfem

@@ -1,0 +1,68 @@
+#!/usr/bin/python3
+"""Plot per-step convergence and energy of a depthfem results file to a PNG.
+
+    plot_series.py RESULT.h5 OUT.png
+
+Three stacked panels against the load factor (static) or time (dynamic): Newton iterations,
+the final Newton residual norm (log scale) and the energy [J]. Errors print one line to stderr
+and exit with status 1.
+"""
+
+import argparse
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")  # no display needed
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from render import (  # noqa: E402
+    ToolError, is_dynamic, open_results, run_main, scene_name, step_names)
+
+
+def read_series(path):
+    """Per-step arrays: load, Newton iterations, final residual (nan if none), energy; and the
+    scene name and whether the run is dynamic."""
+    with open_results(path) as f:
+        steps = [f["steps"][name] for name in step_names(f, path)]
+        load = np.array([s.attrs["load"] for s in steps])
+        newton = np.array([s.attrs["newton_iterations"] for s in steps])
+        residual = np.array([s["residuals"][-1] if s["residuals"].size else np.nan for s in steps])
+        energy = np.array([s.attrs["energy"] for s in steps])
+        return load, newton, residual, energy, scene_name(f), is_dynamic(f)
+
+
+def plot_series(path, out):
+    """Draws the three panels for results file `path` and writes the PNG `out`."""
+    load, newton, residual, energy, name, dynamic = read_series(path)
+    fig, (ax_newton, ax_residual, ax_energy) = plt.subplots(3, 1, sharex=True, figsize=(7, 8))
+    ax_newton.plot(load, newton, "o-")
+    ax_newton.set_ylabel("Newton iterations")
+    ax_newton.yaxis.get_major_locator().set_params(integer=True)
+    ax_residual.semilogy(load, residual, "o-", color="tab:red")
+    ax_residual.set_ylabel("final residual norm")
+    ax_energy.plot(load, energy, "o-", color="tab:green")
+    ax_energy.set_ylabel("energy [J]")
+    ax_energy.set_xlabel("time [s]" if dynamic else "load factor")
+    for ax in (ax_newton, ax_residual, ax_energy):
+        ax.grid(True, alpha=0.3)
+    fig.suptitle(f"{name}: {len(load)} steps" if name else f"{len(load)} steps")
+    fig.tight_layout()
+    try:
+        fig.savefig(out, dpi=150)
+    except OSError as error:
+        raise ToolError(f"{out}: cannot write ({error.strerror})") from None
+    plt.close(fig)
+
+
+def main(argv):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("result", help="results file (.h5)")
+    parser.add_argument("out", help="image to write (.png)")
+    args = parser.parse_args(argv)
+    plot_series(args.result, args.out)
+
+
+if __name__ == "__main__":
+    run_main(main, sys.argv[1:])

@@ -1,0 +1,79 @@
+#include "integrators/newton.hpp"
+
+#include <cmath>
+
+namespace depthfem {
+
+namespace {
+// dx as #nodes x 3 positions.
+Points as_points(const VectorX& v) {
+  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(v.data(), v.size() / 3, 3);
+}
+}  // namespace
+
+NewtonResult NewtonSolver::solve(Points& x) {
+  NewtonResult result;
+  VectorX g, g_trial, dx;
+  system_.prepare(x);
+  double energy = system_.hessian(x, g);
+  if (!std::isfinite(energy)) {
+    result.failure = "the starting configuration is illegal (an element is inverted)";
+    return result;
+  }
+  constraints_.project(g);
+  double residual = g.norm();
+  result.residuals.push_back(residual);
+  for (;;) {
+    result.energy = energy;
+    if (residual <= options_.tolerance) {
+      result.converged = true;
+      return result;
+    }
+    if (result.iterations == options_.max_iterations) {
+      result.failure = "no convergence in " + std::to_string(options_.max_iterations) + " Newton iterations (residual " +
+                       std::to_string(residual) + " N, tolerance " + std::to_string(options_.tolerance) + " N)";
+      return result;
+    }
+    BlockSparseMatrix& H = system_.matrix();
+    constraints_.project(H);
+    LinearSolveStats stats;
+    {
+      PhaseTimers::Scope t(system_.timers(), "linear solve");
+      stats = linear_.solve(H, -g, dx);
+    }
+    result.linear_iterations += stats.iterations;
+    if (!dx.allFinite()) {
+      result.failure = "the linear solver failed (" + to_string(linear_.options().kind) + ")";
+      return result;
+    }
+    const Points step = as_points(dx);
+    double alpha = 1.0;
+    bool accepted = false;
+    for (int k = 0; k <= options_.max_line_search; ++k, alpha *= 0.5) {
+      const Points trial = x + alpha * step;
+      system_.prepare(trial);
+      const double e = system_.gradient(trial, g_trial);
+      if (!std::isfinite(e)) continue;
+      constraints_.project(g_trial);
+      const double r = g_trial.norm();
+      // Energy rule: a drop in energy, or, where the energies agree to round-off, in residual.
+      const bool lower_energy = e < energy || (e <= energy + 1e-12 * std::abs(energy) && r < residual);
+      if (options_.line_search == LineSearchRule::kEnergy ? lower_energy : r < residual) {
+        x = trial;
+        accepted = true;
+        break;
+      }
+    }
+    ++result.iterations;
+    if (!accepted) {
+      result.failure = "line search found no legal step that lowers the residual " + std::to_string(residual) + " N";
+      return result;
+    }
+    energy = system_.hessian(x, g);
+    constraints_.project(g);
+    residual = g.norm();
+    result.residuals.push_back(residual);
+  }
+}
+
+}  // namespace depthfem

@@ -1,0 +1,91 @@
+#include "integrators/static_solver.hpp"
+
+#include <chrono>
+#include <cmath>
+
+#include "core/error.hpp"
+
+namespace depthfem {
+
+namespace {
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+}  // namespace
+
+void StaticSolver::run(Points& x, const std::function<void(const StaticStep&)>& on_step) {
+  // Converged solutions at the last two load factors feed the predictor.
+  double load = 0, previous_load = 0;
+  Points previous = x;
+  double increment = std::min(options_.initial_increment, options_.max_increment);
+  int successes = 0;
+  Index index = 0;
+  auto start = std::chrono::steady_clock::now();
+  std::string last_failure;
+
+  const auto attempt = [&](double target, bool settling) -> bool {
+    Points trial = x;
+    if (options_.predictor && index >= 1 && !settling && load > previous_load) {
+      trial = x + (target - load) / (load - previous_load) * (x - previous);
+    }
+    constraints_.impose(target, trial);
+    if (!std::isfinite(system_.energy(trial))) {  // predictor (or boundary motion) inverted a tet
+      trial = x;
+      constraints_.impose(target, trial);
+      if (!std::isfinite(system_.energy(trial))) {
+        last_failure = "prescribed motion inverts an element";
+        return false;
+      }
+    }
+    if (viscosity_) viscosity_->set_anchor(x);
+    NewtonResult r = newton_.solve(trial);
+    if (!r.converged) {
+      last_failure = r.failure;
+      return false;
+    }
+    previous = x;
+    previous_load = load;
+    x = trial;
+    load = target;
+    StaticStep step;
+    step.index = index++;
+    step.load = load;
+    step.settling = settling;
+    step.newton = std::move(r);
+    step.seconds = seconds_since(start);
+    step.x = &x;
+    system_.gradient(x, step.gradient);
+    on_step(step);
+    start = std::chrono::steady_clock::now();
+    return true;
+  };
+
+  while (load < 1.0) {
+    const double target = std::min(1.0, load + increment);
+    if (attempt(target, false)) {
+      if (++successes >= 2) increment = std::min(options_.max_increment, increment * options_.growth);
+      continue;
+    }
+    successes = 0;
+    increment *= 0.5;
+    if (increment < options_.min_increment) {
+      throw SolveError("load increment fell below min_increment " + std::to_string(options_.min_increment) +
+                       " at load factor " + std::to_string(load) + ": " + last_failure);
+    }
+  }
+  if (!viscosity_) return;
+  // Settle: repeat steps at full load until the viscous force k (x - x_previous) vanishes.
+  for (int k = 0; k < options_.max_settle_steps; ++k) {
+    const Points before = x;
+    if (!attempt(1.0, true)) throw SolveError("settling step failed at full load: " + last_failure);
+    VectorX viscous = VectorX::Zero(3 * x.rows());
+    viscosity_->set_anchor(before);
+    viscosity_->evaluate(x, &viscous, nullptr);
+    constraints_.project(viscous);
+    if (viscous.norm() <= options_.newton.tolerance) return;
+  }
+  throw SolveError("the body did not come to rest in " + std::to_string(options_.max_settle_steps) +
+                   " quasi-viscous steps at full load");
+}
+
+}  // namespace depthfem

@@ -1,0 +1,45 @@
+#include "integrators/system.hpp"
+
+#include <cmath>
+
+namespace depthfem {
+
+void System::prepare(const Points& x) {
+  for (const auto& m : modules_) {
+    PhaseTimers::Scope t(timers_, "collision detection: " + m->name());
+    m->prepare(x);
+  }
+}
+
+double System::evaluate(const Points& x, VectorX* g, BlockSparseMatrix* H) {
+  double total = 0;
+  for (const auto& m : modules_) {
+    PhaseTimers::Scope t(timers_, "force/stiffness: " + m->name());
+    total += m->evaluate(x, g, H);
+    if (!std::isfinite(total)) return total;
+  }
+  return total;
+}
+
+double System::energy(const Points& x) { return evaluate(x, nullptr, nullptr); }
+
+double System::gradient(const Points& x, VectorX& g) {
+  g.setZero(3 * num_nodes_);
+  return evaluate(x, &g, nullptr);
+}
+
+double System::hessian(const Points& x, VectorX& g) {
+  if (!pattern_valid_) {
+    PhaseTimers::Scope t(timers_, "force/stiffness: pattern");
+    SparsityBuilder builder(num_nodes_);
+    for (const auto& m : modules_) m->add_couplings(builder);
+    hessian_ = BlockSparseMatrix(builder);
+    for (const auto& m : modules_) m->bind(hessian_);
+    pattern_valid_ = true;
+  }
+  hessian_.set_zero();
+  g.setZero(3 * num_nodes_);
+  return evaluate(x, &g, &hessian_);
+}
+
+}  // namespace depthfem

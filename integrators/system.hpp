@@ -1,0 +1,56 @@
+#pragma once
+/// The total energy of a scene: the sum of its force modules, with one shared Hessian.
+
+#include <memory>
+#include <vector>
+
+#include "core/phase_timer.hpp"
+#include "integrators/force_module.hpp"
+
+namespace depthfem {
+
+/// Sums E, grad E and hess E over force modules and owns the global Hessian and its pattern.
+/// Module evaluation is timed as "force/stiffness: <module>", preparation as
+/// "collision detection: <module>".
+class System {
+ public:
+  System(Index num_nodes, PhaseTimers& timers) : num_nodes_(num_nodes), timers_(timers) {}
+
+  /// Adds a module and returns a reference to it (the System owns it).
+  template <class M>
+  M& add(std::unique_ptr<M> module) {
+    M& ref = *module;
+    modules_.push_back(std::move(module));
+    pattern_valid_ = false;
+    return ref;
+  }
+
+  Index num_nodes() const { return num_nodes_; }
+  const std::vector<std::unique_ptr<ForceModule>>& modules() const { return modules_; }
+  PhaseTimers& timers() { return timers_; }
+
+  /// Calls every module's prepare(x).
+  void prepare(const Points& x);
+  /// Total energy; +infinity when some module finds x illegal.
+  double energy(const Points& x);
+  /// Total energy and gradient (3 * #nodes, interleaved; overwritten).
+  double gradient(const Points& x, VectorX& g);
+  /// Total energy, gradient and Hessian (overwritten; read it with matrix()). The pattern is
+  /// (re)built on first use or after `invalidate_pattern()`.
+  double hessian(const Points& x, VectorX& g);
+  /// The Hessian filled by the last hessian() call.
+  BlockSparseMatrix& matrix() { return hessian_; }
+  /// Forces a rebuild of the Hessian pattern (a module's couplings changed).
+  void invalidate_pattern() { pattern_valid_ = false; }
+
+ private:
+  double evaluate(const Points& x, VectorX* g, BlockSparseMatrix* H);
+
+  Index num_nodes_;
+  PhaseTimers& timers_;
+  std::vector<std::unique_ptr<ForceModule>> modules_;
+  BlockSparseMatrix hessian_;
+  bool pattern_valid_ = false;
+};
+
+}  // namespace depthfem
