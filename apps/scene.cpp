@@ -184,7 +184,7 @@ void apply_override(json& root, const Override& o, const std::string& file) {
       if (k >= node->size()) throw InputError(file + ": --set " + o.path + ": index " + seg + " out of range");
       node = &(*node)[k];
     } else {
-      if (!node->is_object()) throw InputError(file + ": --set " + o.path + ": '" + seg + "' is not inside an object");
+      if (!node->is_object() && !node->is_null()) throw InputError(file + ": --set " + o.path + ": '" + seg + "' is not inside an object");
       node = &(*node)[seg];
     }
   }

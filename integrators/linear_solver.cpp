@@ -33,6 +33,12 @@ VectorX inverse_diagonal(const BlockSparseMatrix& A) {
 }
 }  // namespace
 
+LinearSolver::LinearSolver(LinearSolverOptions options) : options_(options) {
+  // A failed LL^T is expected past a bifurcation and handled (LDL^T); keep CHOLMOD quiet.
+  llt_.cholmod().print = 0;
+  ldlt_.cholmod().print = 0;
+}
+
 LinearSolveStats LinearSolver::solve(const BlockSparseMatrix& A, const VectorX& b, VectorX& x) {
   x.setZero(b.size());
   if (b.norm() == 0) return {0, 0.0, true};
@@ -138,12 +144,18 @@ LinearSolveStats LinearSolver::cg(const BlockSparseMatrix& A, const VectorX& b, 
 LinearSolveStats LinearSolver::direct(const BlockSparseMatrix& A, const VectorX& b, VectorX& x) {
   const Eigen::SparseMatrix<double> S = A.to_sparse();
   if (analysed_blocks_ != A.num_blocks()) {
+    llt_.analyzePattern(S);
     ldlt_.analyzePattern(S);
     analysed_blocks_ = A.num_blocks();
   }
-  ldlt_.factorize(S);
-  if (ldlt_.info() != Eigen::Success) return {1, 1.0, false};
-  x = ldlt_.solve(b);
+  llt_.factorize(S);
+  if (llt_.info() == Eigen::Success) {
+    x = llt_.solve(b);
+  } else {
+    ldlt_.factorize(S);
+    if (ldlt_.info() != Eigen::Success) return {1, 1.0, false};
+    x = ldlt_.solve(b);
+  }
   VectorX Ax;
   A.multiply(x, Ax);
   return {1, (b - Ax).norm() / b.norm(), x.allFinite()};

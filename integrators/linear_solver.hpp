@@ -1,7 +1,7 @@
 #pragma once
 /// Linear solvers for the Newton system behind one interface.
 
-#include <Eigen/SparseCholesky>
+#include <Eigen/CholmodSupport>
 #include <memory>
 #include <string>
 
@@ -13,7 +13,7 @@ namespace depthfem {
 enum class LinearSolverKind {
   kGmres,     ///< restarted GMRES, Jacobi (diagonal) preconditioning: the paper's choice
   kCg,        ///< conjugate gradients, Jacobi preconditioning
-  kDirect,    ///< sparse LDL^T (Eigen SimplicialLDLT, AMD ordering)
+  kDirect,    ///< sparse Cholesky (CHOLMOD supernodal LL^T; simplicial LDL^T if indefinite)
 };
 
 /// Parses "gmres", "cg", "direct"; throws std::invalid_argument otherwise.
@@ -38,10 +38,12 @@ struct LinearSolveStats {
 };
 
 /// Solves A x = b with the chosen method. The direct method reuses its symbolic analysis while
-/// the matrix pattern (number of blocks) is unchanged.
+/// the matrix pattern (number of blocks) is unchanged. A matrix that is not positive definite
+/// (past a bifurcation) fails the supernodal LL^T; the solver then factors it as LDL^T, which
+/// takes indefinite matrices with nonzero pivots.
 class LinearSolver {
  public:
-  explicit LinearSolver(LinearSolverOptions options = {}) : options_(options) {}
+  explicit LinearSolver(LinearSolverOptions options = {});
   const LinearSolverOptions& options() const { return options_; }
   /// Starts from x = 0. Returns statistics; x holds the best solution found.
   LinearSolveStats solve(const BlockSparseMatrix& A, const VectorX& b, VectorX& x);
@@ -52,7 +54,8 @@ class LinearSolver {
   LinearSolveStats direct(const BlockSparseMatrix& A, const VectorX& b, VectorX& x);
 
   LinearSolverOptions options_;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt_;
+  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt_;
+  Eigen::CholmodSimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt_;
   Index analysed_blocks_ = -1;
 };
 

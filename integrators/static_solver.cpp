@@ -74,15 +74,27 @@ void StaticSolver::run(Points& x, const std::function<void(const StaticStep&)>& 
     }
   }
   if (!viscosity_) return;
-  // Settle: repeat steps at full load until the viscous force k (x - x_previous) vanishes.
+  // Settle at full load by pseudo-transient continuation: each step is a viscous (proximal)
+  // step from the last one; the viscosity is halved after every success and raised fourfold after
+  // a failure, so the body first creeps off unstable equilibria, then the steps approach plain
+  // Newton solves. At rest the motion of a step at the base viscosity exerts no force worth the
+  // Newton tolerance.
+  double scale = 1.0;
   for (int k = 0; k < options_.max_settle_steps; ++k) {
     const Points before = x;
-    if (!attempt(1.0, true)) throw SolveError("settling step failed at full load: " + last_failure);
+    viscosity_->set_scale(scale);
+    if (!attempt(1.0, true)) {
+      scale *= 4;
+      if (scale > 1e6) throw SolveError("settling step failed at full load: " + last_failure);
+      continue;
+    }
     VectorX viscous = VectorX::Zero(3 * x.rows());
+    viscosity_->set_scale(1.0);
     viscosity_->set_anchor(before);
     viscosity_->evaluate(x, &viscous, nullptr);
     constraints_.project(viscous);
     if (viscous.norm() <= options_.newton.tolerance) return;
+    scale = std::max(scale / 2, 1e-12);
   }
   throw SolveError("the body did not come to rest in " + std::to_string(options_.max_settle_steps) +
                    " quasi-viscous steps at full load");

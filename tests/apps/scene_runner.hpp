@@ -1,0 +1,27 @@
+#pragma once
+// Helpers for tests that run the scenes of apps/scenes.
+
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "apps/run_scene.hpp"
+
+namespace depthfem::testing {
+
+inline std::string scene_path(const std::string& name) {
+  return std::string(DEPTHFEM_SOURCE_DIR) + "/apps/scenes/" + name + ".json";
+}
+
+inline Scene load(const std::string& name, const std::vector<std::string>& overrides = {}) {
+  std::vector<Override> o;
+  for (const std::string& s : overrides) o.push_back(parse_override(s));
+  return load_scene(scene_path(name), o);
+}
+
+inline RunResult run(const Scene& scene, const std::string& out = "") {
+  std::ostringstream log;
+  return run_scene(scene, {out, 0}, log);
+}
+
+}  // namespace depthfem::testing

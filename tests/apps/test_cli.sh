@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# End-to-end checks of the depthfem command line: exit codes, the one-line error, partial results.
+# Usage: test_cli.sh PATH/TO/depthfem SOURCE_DIR
+set -u
+exe=$1
+src=$2
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+
+"$exe" run "$src/apps/scenes/uniaxial_block.json" --out "$tmp/ok.h5" > "$tmp/ok.log" 2>&1 || fail "uniaxial_block run exited $?"
+grep -q "^step    0" "$tmp/ok.log" || fail "no progress line"
+grep -q "= linear solve" "$tmp/ok.log" || fail "no timing table"
+"$exe" info "$tmp/ok.h5" > "$tmp/info.log" || fail "info exited $?"
+grep -q "status: completed" "$tmp/info.log" || fail "info does not report completion"
+[ -f "$tmp/ok.xmf" ] || fail "no XDMF sidecar"
+
+"$exe" run "$src/apps/scenes/uniaxial_block.json" --out "$tmp/bad.h5" --set boundary.3.offset=-1.5 \
+  --set solver.min_increment=0.01 > /dev/null 2> "$tmp/err.log"
+rc=$?
+[ $rc -eq 1 ] || fail "failed run exited $rc, expected 1"
+[ "$(wc -l < "$tmp/err.log")" -eq 1 ] || fail "expected one error line, got: $(cat "$tmp/err.log")"
+grep -q "^depthfem: error: load increment fell below min_increment" "$tmp/err.log" || fail "error line: $(cat "$tmp/err.log")"
+"$exe" info "$tmp/bad.h5" > "$tmp/info2.log" || fail "info on the failed run exited $?"
+grep -q "status: failed" "$tmp/info2.log" || fail "failed run not marked failed"
+grep -Eq "steps: [1-9]" "$tmp/info2.log" || fail "failed run kept no steps"
+
+"$exe" run "$src/apps/scenes/uniaxial_block.json" > /dev/null 2> "$tmp/usage.log"
+[ $? -eq 2 ] || fail "missing --out must be a usage error (exit 2)"
+grep -q "^depthfem: error: run needs --out" "$tmp/usage.log" || fail "usage message: $(cat "$tmp/usage.log")"
+"$exe" run "$src/apps/scenes/uniaxial_block.json" --out "$tmp/x.h5" --threads zero > /dev/null 2>&1
+[ $? -eq 2 ] || fail "--threads zero must be a usage error"
+"$exe" run "$src/apps/scenes/uniaxial_block.json" --out "$tmp/x.h5" --set bodies.0.material.C9=1 > /dev/null 2> "$tmp/key.log"
+[ $? -eq 1 ] || fail "unknown key must exit 1"
+grep -q "bodies\[0\].material.C9: unknown key" "$tmp/key.log" || fail "unknown key not named: $(cat "$tmp/key.log")"
+"$exe" info "$tmp/nothing.h5" > /dev/null 2>&1 && fail "info on a missing file must fail"
+echo "cli: all checks passed"

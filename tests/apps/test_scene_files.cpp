@@ -1,0 +1,103 @@
+// Scene-file errors name the file and the key path; overrides reach nested keys.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "apps/scene.hpp"
+#include "core/error.hpp"
+
+namespace depthfem {
+namespace {
+
+class SceneFileTest : public ::testing::Test {
+ protected:
+  std::filesystem::path dir = std::filesystem::temp_directory_path() / "depthfem_scene_test";
+  void SetUp() override { std::filesystem::create_directories(dir); }
+  void TearDown() override { std::filesystem::remove_all(dir); }
+
+  std::string write(const std::string& text) {
+    const std::string p = (dir / "scene.json").string();
+    std::ofstream(p) << text;
+    return p;
+  }
+  // Loads `text` and returns the InputError message ("" if it loads).
+  std::string error(const std::string& text, const std::vector<Override>& o = {}) {
+    try {
+      load_scene(write(text), o);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "";
+  }
+};
+
+const char* kValid = R"({
+  "name": "t",
+  "bodies": [{"name": "b", "mesh": {"generator": "box", "lo": [0,0,0], "hi": [1,1,1], "cells": [1,1,1]},
+              "material": {"model": "mooney_rivlin", "C1": 1, "C2": 1, "a": 1}}],
+  "boundary": [{"type": "fixed", "nodes": {"plane": {"normal": [1,0,0], "offset": 0}}}]
+})";
+
+std::string replaced(std::string s, const std::string& from, const std::string& to) {
+  const size_t p = s.find(from);
+  EXPECT_NE(p, std::string::npos) << from;
+  return s.replace(p, from.size(), to);
+}
+
+TEST_F(SceneFileTest, ValidSceneLoads) {
+  EXPECT_EQ(error(kValid), "");
+  const Scene s = load_scene(write(kValid));
+  EXPECT_EQ(s.mesh.num_tets(), 6);
+  EXPECT_EQ(s.constraints.size(), 1u);
+  EXPECT_EQ(s.constraints[0].nodes.size(), 4u);
+  EXPECT_EQ(s.constraints[0].name, "fixed_0");
+}
+
+TEST_F(SceneFileTest, UnknownKeyIsNamedWithItsPath) {
+  const std::string m = error(replaced(kValid, "\"C2\": 1", "\"C3\": 1"));
+  EXPECT_NE(m.find("scene.json: bodies[0].material.C2: missing required key"), std::string::npos) << m;
+  const std::string u = error(replaced(kValid, "\"name\": \"t\"", "\"name\": \"t\", \"gravty\": [0,0,1]"));
+  EXPECT_NE(u.find("scene.json: gravty: unknown key"), std::string::npos) << u;
+}
+
+TEST_F(SceneFileTest, WrongTypesAreNamed) {
+  EXPECT_NE(error(replaced(kValid, "\"C1\": 1", "\"C1\": \"soft\"")).find("bodies[0].material.C1: expected a number"),
+            std::string::npos);
+  EXPECT_NE(error(replaced(kValid, "\"cells\": [1,1,1]", "\"cells\": [1,1]")).find("bodies[0].mesh.cells: expected an array of 3"),
+            std::string::npos);
+  EXPECT_NE(error(replaced(kValid, "\"offset\": 0", "\"offset\": true")).find("boundary[0].nodes.plane.offset: expected a number"),
+            std::string::npos);
+}
+
+TEST_F(SceneFileTest, BadValuesAreNamed) {
+  EXPECT_NE(error(replaced(kValid, "mooney_rivlin", "rubber")).find("bodies[0].material.model: unknown material model 'rubber'"),
+            std::string::npos);
+  EXPECT_NE(error(replaced(kValid, "\"C1\": 1", "\"C1\": -1")).find("bodies[0].material.model: mooney_rivlin: C1 and C2 must be >= 0"),
+            std::string::npos);
+  EXPECT_NE(error(replaced(kValid, "\"offset\": 0", "\"offset\": 5")).find("boundary[0].nodes: selects no nodes"),
+            std::string::npos);
+  EXPECT_NE(error(replaced(kValid, "\"fixed\"", "\"glued\"")).find("boundary[0].type: unknown boundary condition 'glued'"),
+            std::string::npos);
+  EXPECT_NE(error(replaced(kValid, "\"generator\": \"box\"", "\"file\": \"missing.msh\"")).find("missing.msh"),
+            std::string::npos);
+  EXPECT_NE(error("{\"bodies\": [").find("scene.json: invalid JSON"), std::string::npos);
+}
+
+TEST_F(SceneFileTest, OverridesReachNestedKeys) {
+  const Scene s = load_scene(write(kValid), {parse_override("bodies.0.mesh.cells=[2,1,1]"),
+                                             parse_override("solver.linear_solver=gmres")});
+  EXPECT_EQ(s.mesh.num_tets(), 12);
+  EXPECT_EQ(s.static_options.newton.linear.kind, LinearSolverKind::kGmres);
+  EXPECT_NE(error(kValid, {parse_override("bodies.3.name=x")}).find("index 3 out of range"), std::string::npos);
+  EXPECT_THROW(parse_override("no_equals_sign"), InputError);
+  try {
+    load_scene("/nonexistent/scene.json");
+    FAIL() << "a missing scene file must throw";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/scene.json: cannot open scene file"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace depthfem
