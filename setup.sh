@@ -3,6 +3,7 @@
 # in Release. Runs as root without prompts; a non-root user needs sudo for the install step.
 # Usage: ./setup.sh            install + build
 #        ./setup.sh --test     install + build + run the whole test suite
+#        ./setup.sh --demo     install + build + run the demo scene (HDF5 results + PNG picture)
 set -euo pipefail
 cd "$(dirname "$0")"
 
@@ -29,6 +30,7 @@ cmake --build build -j"$jobs"
 
 case "${1:-}" in
   --test) ctest --test-dir build --output-on-failure -j"$jobs" ;;
+  --demo) ./apps/demo.sh ;;
   "") ;;
-  *) echo "setup: unknown option '$1' (expected --test)" >&2; exit 2 ;;
+  *) echo "setup: unknown option '$1' (expected --test or --demo)" >&2; exit 2 ;;
 esac

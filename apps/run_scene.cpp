@@ -11,6 +11,8 @@
 #include "core/error.hpp"
 #include "core/lumped_mass.hpp"
 #include "core/results_file.hpp"
+#include "contact/material_depth.hpp"
+#include "contact/node_to_surface_contact.hpp"
 #include "integrators/gravity.hpp"
 
 namespace depthfem {
@@ -32,6 +34,13 @@ std::string format(const char* fmt, auto... args) {
   char buf[256];
   std::snprintf(buf, sizeof buf, fmt, args...);
   return buf;
+}
+
+// Sum over contact pairs of the magnitude of the penalty force on the pair's triangle [N].
+double contact_force(const MaterialDepthContact& c, const Points& x) {
+  double total = 0;
+  for (const ContactPair& p : c.pairs()) total += c.pair_derivatives(x, p).gradient.tail<9>().reshaped(3, 3).rowwise().sum().norm();
+  return total;
 }
 
 }  // namespace
@@ -70,6 +79,23 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     viscosity = &system.add(std::make_unique<NodalSpring>(
         "quasi-viscosity", quasi_viscosity_stiffness(mesh.X, mesh.tets, scene.quasi_viscosity)));
   }
+  // Contact is built only when the scene asks for it.
+  VectorX depth;
+  MaterialDepthContact* contact = nullptr;
+  if (scene.contact == ContactModel::kMaterialDepth) {
+    PhaseTimers::Scope t(result.timers, "collision detection: material depth");
+    depth = material_depth(mesh);
+    contact = &system.add(std::make_unique<MaterialDepthContact>(mesh, depth, scene.contact_options));
+  } else if (scene.contact == ContactModel::kNodeToSurface) {
+    system.add(std::make_unique<NodeToSurfaceContact>(mesh, scene.contact_options.penalty));
+  }
+  ObstacleContact* obstacles = nullptr;
+  if (!scene.obstacles.empty()) {
+    std::vector<Index> deformable;
+    for (size_t b = 0; b < mesh.bodies.size(); ++b)
+      if (!scene.rigid[b]) deformable.push_back(static_cast<Index>(b));
+    obstacles = &system.add(std::make_unique<ObstacleContact>(mesh, deformable, scene.obstacles));
+  }
   const Constraints constraints(mesh.X, scene.constraints);
   StaticOptions opt = scene.static_options;
   opt.newton.tolerance = newton_tolerance(scene);
@@ -78,7 +104,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   if (!options.out.empty()) {
     RunInfo info{scene.json_text, kVersion, scene.analysis, threads, {}};
     for (const Constraint& c : scene.constraints) info.constraint_names.push_back(c.name);
-    file = std::make_unique<ResultsFile>(options.out, mesh, VectorX(), info);
+    file = std::make_unique<ResultsFile>(options.out, mesh, depth, info);
   }
   log << "scene " << scene.name << ": " << mesh.num_nodes() << " nodes, " << mesh.num_tets() << " tets, "
       << mesh.bodies.size() << " bodies, " << threads << " threads, linear solver "
@@ -90,6 +116,15 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     solver.run(result.x, [&](const StaticStep& s) {
       StepSummary sum{s.load, s.newton.iterations, s.newton.linear_iterations, s.newton.energy,
                       s.newton.residuals.back(), constraints.reactions(s.gradient)};
+      if (contact) {
+        sum.contact_area = contact->stats().area;
+        sum.contact_force = contact_force(*contact, *s.x);
+        sum.max_depth = contact->stats().max_depth;
+      }
+      if (obstacles) {
+        sum.contact_area = sum.contact_area.value_or(0) + obstacles->contact_area(*s.x);
+        sum.contact_force = sum.contact_force.value_or(0) + obstacles->total_force(*s.x).norm();
+      }
       log << format("step %4d  load %.4f%s  newton %2d  linear %5d  residual %.3e  energy % .6e  %.2f s\n",
                     int(s.index), s.load, s.settling ? " (settle)" : "", sum.newton_iterations,
                     sum.linear_iterations, sum.residual, sum.energy, s.seconds);
@@ -104,6 +139,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
         rec.seconds = s.seconds;
         rec.residuals = s.newton.residuals;
         rec.reactions = sum.reactions;
+        rec.contact_area = sum.contact_area;
+        rec.contact_force = sum.contact_force;
         file->append_step(rec);
       }
       result.steps.push_back(std::move(sum));

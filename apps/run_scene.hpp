@@ -1,6 +1,7 @@
 #pragma once
 /// Running a scene: builds its force modules, drives the solver, writes the results file.
 
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -21,6 +22,9 @@ struct StepSummary {
   int newton_iterations = 0, linear_iterations = 0;
   double energy = 0, residual = 0;
   Eigen::Matrix<double, Eigen::Dynamic, 3> reactions;  ///< per boundary condition [N]
+  std::optional<double> contact_area;   ///< [m^2], with contact or obstacles
+  std::optional<double> contact_force;  ///< [N]: obstacle force + sum over pairs of |pair force|
+  double max_depth = 0;                 ///< deepest interpolated penetration depth [m]
 };
 
 /// Outcome of a run. On failure `message` says why; completed steps are kept.

@@ -28,7 +28,7 @@ TetMesh read_body_mesh(JsonObject m, const std::string& scene_dir) {
   } else {
     const std::string gen = m.string("generator");
     if (gen == "box") {
-      mesh = box_mesh({m.vec3("lo"), m.vec3("hi"), m.int3("cells")});
+      mesh = box_mesh({m.vec3("lo"), m.vec3("hi"), m.int3("cells"), m.vec3("ratio", Vec3::Ones())});
     } else if (gen == "tube") {
       mesh = tube_mesh({m.number("inner_radius"), m.number("outer_radius"), m.number("length"),
                         m.integer("cells_through_wall"), m.integer("cells_around"), m.integer("cells_along")});
@@ -135,6 +135,41 @@ Constraint read_constraint(JsonObject c, const Mesh& mesh, size_t index) {
   return out;
 }
 
+void read_contact(JsonObject c, Scene& scene) {
+  const std::string model = c.string("model", "material_depth");
+  if (model == "material_depth") {
+    scene.contact = ContactModel::kMaterialDepth;
+  } else if (model == "node_to_surface") {
+    scene.contact = ContactModel::kNodeToSurface;
+  } else {
+    c.fail("model", "unknown contact model '" + model + "' (expected material_depth or node_to_surface)");
+  }
+  scene.contact_options.penalty = c.number("penalty");
+  scene.contact_options.self_contact = c.boolean("self_contact", true);
+  if (!(scene.contact_options.penalty > 0)) c.fail("penalty", "must be > 0");
+  c.finish();
+}
+
+Obstacle read_obstacle(JsonObject o, size_t index) {
+  Obstacle out;
+  const std::string type = o.string("type");
+  out.name = o.string("name", type + "_" + std::to_string(index));
+  if (type == "plane") {
+    out.shape = PlaneObstacle{o.vec3("point"), o.vec3("normal")};
+    if (!(std::get<PlaneObstacle>(out.shape).normal.norm() > 0)) o.fail("normal", "must be a non-zero vector");
+  } else if (type == "sphere") {
+    out.shape = SphereObstacle{o.vec3("center"), o.number("radius")};
+    if (!(std::get<SphereObstacle>(out.shape).radius > 0)) o.fail("radius", "must be > 0");
+  } else {
+    o.fail("type", "unknown obstacle '" + type + "' (expected plane or sphere)");
+  }
+  out.motion = o.vec3("motion", Vec3::Zero());
+  out.penalty = o.number("penalty");
+  if (!(out.penalty > 0)) o.fail("penalty", "must be > 0");
+  o.finish();
+  return out;
+}
+
 void read_solver(JsonObject s, Scene& scene) {
   StaticOptions& o = scene.static_options;
   try {
@@ -228,17 +263,26 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
     for (const Body& existing : scene.mesh.bodies)
       if (existing.name == name) b.fail("name", "duplicate body name '" + name + "'");
     const TetMesh mesh = read_body_mesh(b.object("mesh"), dir);
-    Vec3 fiber = Vec3::UnitX();
-    const MaterialModel material = read_material(b.object("material"), fiber);
+    const bool rigid = b.boolean("rigid", false);
+    const Index id = scene.mesh.add_body(name, mesh);
+    const Body& body = scene.mesh.bodies[id];
+    scene.rigid.push_back(rigid);
+    if (rigid) {
+      // No unknowns: held in place unless a boundary condition on the body moves it.
+      std::vector<Index> nodes(static_cast<size_t>(body.num_nodes));
+      for (Index k = 0; k < body.num_nodes; ++k) nodes[k] = body.first_node + k;
+      scene.constraints.push_back({name + "_rigid", nodes, Fixed{}});
+      if (b.has("material")) b.fail("material", "a rigid body takes no material");
+    } else {
+      Vec3 fiber = Vec3::UnitX();
+      ElasticGroup g{read_material(b.object("material"), fiber), {}, Points()};
+      for (Index t = 0; t < body.num_tets; ++t) g.tets.push_back(body.first_tet + t);
+      if (material_uses_fiber(g.material)) g.fibers = fiber.transpose().replicate(body.num_tets, 1);
+      scene.groups.push_back(std::move(g));
+    }
     const double rho = b.number("density", 1000.0);
     if (!(rho > 0)) b.fail("density", "must be > 0");
     b.finish();
-    const Index id = scene.mesh.add_body(name, mesh);
-    const Body& body = scene.mesh.bodies[id];
-    ElasticGroup g{material, {}, Points()};
-    for (Index t = 0; t < body.num_tets; ++t) g.tets.push_back(body.first_tet + t);
-    if (material_uses_fiber(material)) g.fibers = fiber.transpose().replicate(body.num_tets, 1);
-    scene.groups.push_back(std::move(g));
     density.insert(density.end(), static_cast<size_t>(body.num_tets), rho);
   }
   if (scene.mesh.bodies.empty()) r.fail("bodies", "a scene needs at least one body");
@@ -247,6 +291,11 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
   if (r.has("boundary")) {
     std::vector<JsonObject> list = r.objects("boundary");
     for (size_t k = 0; k < list.size(); ++k) scene.constraints.push_back(read_constraint(list[k], scene.mesh, k));
+  }
+  if (r.has("contact")) read_contact(r.object("contact"), scene);
+  if (r.has("obstacles")) {
+    std::vector<JsonObject> list = r.objects("obstacles");
+    for (size_t k = 0; k < list.size(); ++k) scene.obstacles.push_back(read_obstacle(list[k], k));
   }
   if (r.has("solver")) read_solver(r.object("solver"), scene);
   r.finish();

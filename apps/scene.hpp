@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "contact/material_depth_contact.hpp"
+#include "contact/obstacle_contact.hpp"
 #include "core/mesh.hpp"
 #include "integrators/constraints.hpp"
 #include "integrators/elasticity.hpp"
@@ -13,16 +15,23 @@
 namespace depthfem {
 
 /// Everything a run needs, read and validated from a scene file.
+/// Which contact model a scene uses between (and within) its bodies.
+enum class ContactModel { kNone, kMaterialDepth, kNodeToSurface };
+
 struct Scene {
   std::string name;
   std::string file;       ///< path it was read from
   std::string json_text;  ///< the (possibly overridden) scene as JSON, stored in the results
   std::string analysis = "static";
   Mesh mesh;
-  std::vector<ElasticGroup> groups;   ///< one per body
+  std::vector<ElasticGroup> groups;   ///< one per deformable body
+  std::vector<bool> rigid;            ///< per body: prescribed motion only, no unknowns
   VectorX tet_density;                ///< [kg/m^3] per tet
   Vec3 gravity = Vec3::Zero();        ///< [m/s^2]
   std::vector<Constraint> constraints;
+  ContactModel contact = ContactModel::kNone;
+  ContactOptions contact_options;
+  std::vector<Obstacle> obstacles;
   double quasi_viscosity = 0;         ///< [Pa]; 0: off
   double tolerance = 1e-9;            ///< relative Newton tolerance (see scene docs)
   StaticOptions static_options;

@@ -43,13 +43,18 @@ TetMesh box_mesh(const BoxParams& p) {
   const Eigen::Vector3i n = p.cells;
   require(n.minCoeff() >= 1, "box: cells must be >= 1 along every axis");
   require((p.hi - p.lo).minCoeff() > 0, "box: hi must exceed lo along every axis");
+  require(p.ratio.minCoeff() > 0, "box: cell size ratios must be > 0");
+  // Fraction of the length below node k of n along an axis with cell ratio r.
+  const auto fraction = [](int k, int n, double r) {
+    return std::abs(r - 1) < 1e-12 ? double(k) / n : (std::pow(r, k) - 1) / (std::pow(r, n) - 1);
+  };
   TetMesh m;
   m.X.resize((n(0) + 1) * (n(1) + 1) * (n(2) + 1), 3);
   const auto id = [&](int i, int j, int k) { return i + (n(0) + 1) * (j + (n(1) + 1) * k); };
   for (int k = 0; k <= n(2); ++k)
     for (int j = 0; j <= n(1); ++j)
       for (int i = 0; i <= n(0); ++i) {
-        const Vec3 s(double(i) / n(0), double(j) / n(1), double(k) / n(2));
+        const Vec3 s(fraction(i, n(0), p.ratio(0)), fraction(j, n(1), p.ratio(1)), fraction(k, n(2), p.ratio(2)));
         m.X.row(id(i, j, k)) = (p.lo.array() + s.array() * (p.hi - p.lo).array()).transpose();
       }
   m.tets = kuhn_tets(n(0), n(1), n(2), id);

@@ -7,11 +7,14 @@
 
 namespace depthfem {
 
-/// Axis-aligned box [lo, hi] with n cells along each axis.
+/// Axis-aligned box [lo, hi] with n cells along each axis. Along an axis with ratio r, each cell
+/// is r times as long as the one before it (node k of n at lo + (hi - lo) (r^k - 1) / (r^n - 1)):
+/// r > 1 refines towards lo with constant relative resolution; r = 1 is uniform.
 struct BoxParams {
   Vec3 lo = Vec3::Zero();     ///< [m]
   Vec3 hi = Vec3::Ones();     ///< [m]
   Eigen::Vector3i cells{1, 1, 1};
+  Vec3 ratio = Vec3::Ones();
 };
 
 /// Cylindrical shell around the z axis, z in [0, length].

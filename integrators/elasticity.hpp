@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "core/tet_block.hpp"
-#include "integrators/force_module.hpp"
+#include "core/force_module.hpp"
 #include "materials/material.hpp"
 
 namespace depthfem {

@@ -1,7 +1,7 @@
 #pragma once
 /// Body force of a uniform gravity field on lumped nodal masses.
 
-#include "integrators/force_module.hpp"
+#include "core/force_module.hpp"
 
 namespace depthfem {
 

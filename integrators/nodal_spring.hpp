@@ -1,7 +1,7 @@
 #pragma once
 /// Per-node quadratic tether to an anchor configuration: quasi-viscosity and inertia.
 
-#include "integrators/force_module.hpp"
+#include "core/force_module.hpp"
 
 namespace depthfem {
 

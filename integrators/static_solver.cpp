@@ -29,6 +29,7 @@ void StaticSolver::run(Points& x, const std::function<void(const StaticStep&)>& 
       trial = x + (target - load) / (load - previous_load) * (x - previous);
     }
     constraints_.impose(target, trial);
+    system_.begin_step(x, target);
     if (!std::isfinite(system_.energy(trial))) {  // predictor (or boundary motion) inverted a tet
       trial = x;
       constraints_.impose(target, trial);

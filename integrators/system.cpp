@@ -4,10 +4,18 @@
 
 namespace depthfem {
 
+void System::begin_step(const Points& x, double load) {
+  for (const auto& m : modules_) {
+    PhaseTimers::Scope t(timers_, "collision detection: " + m->name());
+    m->begin_step(x, load);
+  }
+}
+
 void System::prepare(const Points& x) {
   for (const auto& m : modules_) {
     PhaseTimers::Scope t(timers_, "collision detection: " + m->name());
     m->prepare(x);
+    if (m->pattern_changed()) pattern_valid_ = false;
   }
 }
 

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "core/phase_timer.hpp"
-#include "integrators/force_module.hpp"
+#include "core/force_module.hpp"
 
 namespace depthfem {
 
@@ -29,7 +29,9 @@ class System {
   const std::vector<std::unique_ptr<ForceModule>>& modules() const { return modules_; }
   PhaseTimers& timers() { return timers_; }
 
-  /// Calls every module's prepare(x).
+  /// Calls every module's begin_step(x, load).
+  void begin_step(const Points& x, double load);
+  /// Calls every module's prepare(x); a module whose couplings changed invalidates the pattern.
   void prepare(const Points& x);
   /// Total energy; +infinity when some module finds x illegal.
   double energy(const Points& x);

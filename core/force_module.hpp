@@ -18,8 +18,16 @@ class ForceModule {
   /// Short name used in timing tables and messages.
   virtual std::string name() const = 0;
 
+  /// Once per load increment or time step, from its converged start x towards load factor (or
+  /// time) `load`: rebuild a tree, place a moving obstacle.
+  virtual void begin_step(const Points& /*x*/, double /*load*/) {}
+
   /// Once per iterate before evaluation (refit a tree, find contact pairs). Default: nothing.
   virtual void prepare(const Points& /*x*/) {}
+
+  /// True when the couplings changed since the last bind() (new contact pairs): the owner
+  /// rebuilds the Hessian pattern before the next assembly.
+  virtual bool pattern_changed() const { return false; }
 
   /// Adds the node couplings this module's Hessian writes to.
   virtual void add_couplings(SparsityBuilder& builder) const = 0;

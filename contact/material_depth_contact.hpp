@@ -1,0 +1,81 @@
+#pragma once
+/// Frictionless penalty contact with the material-depth gap (paper section 5): every boundary
+/// triangle against every tet of another body (and of its own body, for self-contact), the
+/// penalty eps/2 g^2 integrated exactly over their intersection polygon.
+
+#include <vector>
+
+#include "contact/aabb_tree.hpp"
+#include "contact/clip.hpp"
+#include "core/mesh.hpp"
+#include "core/force_module.hpp"
+
+namespace depthfem {
+
+struct ContactOptions {
+  double penalty = 1e6;      ///< eps [Pa/m]: contact pressure per metre of material depth
+  bool self_contact = true;  ///< triangles against the tets of their own body
+};
+
+/// A boundary triangle cutting a tet, with the polygon they share.
+struct ContactPair {
+  Index tri = 0, tet = 0;
+  ClipPolygon polygon;
+};
+
+/// What the active pairs amount to at the last prepare().
+struct ContactStats {
+  Index candidates = 0;      ///< triangle-tet pairs whose boxes overlap
+  Index active = 0;          ///< pairs with an intersection polygon
+  double area = 0;           ///< total intersection area [m^2]
+  double max_depth = 0;      ///< largest interpolated depth at a polygon vertex [m]
+};
+
+/// The contact force module. Geometry (tree, clipping, depth lookup) lives in aabb_tree, clip
+/// and material_depth; this class pairs elements and integrates the penalty (penalty.hpp).
+/// Pair search and integration run in parallel; results are summed in pair order, so they do
+/// not depend on the number of threads.
+class MaterialDepthContact final : public ForceModule {
+ public:
+  /// `depth` per node [m] (material_depth(mesh)).
+  MaterialDepthContact(const Mesh& mesh, VectorX depth, ContactOptions options);
+
+  std::string name() const override { return "contact"; }
+  void begin_step(const Points& x, double load) override;
+  void prepare(const Points& x) override;
+  void add_couplings(SparsityBuilder& builder) const override;
+  void bind(const BlockSparseMatrix& hessian) override;
+  bool pattern_changed() const override { return pattern_changed_; }
+  double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
+
+  const std::vector<ContactPair>& pairs() const { return pairs_; }
+  ContactStats stats() const { return stats_; }
+  const VectorX& depth() const { return depth_; }
+
+  /// Energy, gradient (21) and Hessian (21 x 21) of one pair; variables: tet corners 0..11,
+  /// triangle corners 12..20.
+  struct PairDerivatives {
+    double energy = 0;
+    Eigen::Matrix<double, 21, 1> gradient;
+    Eigen::Matrix<double, 21, 21> hessian;
+  };
+  PairDerivatives pair_derivatives(const Points& x, const ContactPair& p) const;
+  double pair_energy(const Points& x, const ContactPair& p) const;
+
+ private:
+  std::array<Index, 7> pair_nodes(const ContactPair& p) const;
+
+  TetIndices tets_;
+  TriIndices tris_;
+  IndexVector tet_body_, tri_body_;
+  VectorX depth_;
+  ContactOptions options_;
+  double min_area2_ = 0;
+  AabbTree tree_;
+  std::vector<ContactPair> pairs_;
+  ContactStats stats_;
+  const BlockSparseMatrix* bound_ = nullptr;
+  bool pattern_changed_ = false;
+};
+
+}  // namespace depthfem

@@ -1,0 +1,45 @@
+#pragma once
+/// The baseline the paper argues against: node-to-surface penalty with a projection-based gap.
+/// A boundary node found inside another body is pushed out along the normal of the nearest
+/// boundary triangle of that body with energy eps A_i / 2 g^2, g = n . (Q_0 - x_i) (A_i: the
+/// node's share of boundary area). The nearest triangle, and so the force direction, jumps as
+/// nodes slide across edges: the force is discontinuous in x.
+
+#include <vector>
+
+#include "contact/aabb_tree.hpp"
+#include "core/force_module.hpp"
+#include "core/mesh.hpp"
+
+namespace depthfem {
+
+class NodeToSurfaceContact final : public ForceModule {
+ public:
+  NodeToSurfaceContact(const Mesh& mesh, double penalty);
+
+  std::string name() const override { return "node-to-surface contact"; }
+  void begin_step(const Points& x, double load) override;
+  void prepare(const Points& x) override;
+  void add_couplings(SparsityBuilder& builder) const override;
+  void bind(const BlockSparseMatrix& hessian) override;
+  bool pattern_changed() const override { return pattern_changed_; }
+  double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
+
+  /// Active (node, triangle) pairs of the last prepare().
+  const std::vector<std::pair<Index, Index>>& pairs() const { return pairs_; }
+
+ private:
+  TetIndices tets_;
+  TriIndices tris_;
+  IndexVector tet_body_, tri_body_;
+  std::vector<Index> surface_nodes_;  // nodes on some boundary triangle
+  IndexVector node_body_;
+  VectorX node_area_;                 // boundary area share per node [m^2]
+  double penalty_;
+  AabbTree tet_tree_, tri_tree_;
+  std::vector<std::pair<Index, Index>> pairs_;
+  const BlockSparseMatrix* bound_ = nullptr;
+  bool pattern_changed_ = false;
+};
+
+}  // namespace depthfem

@@ -1,0 +1,61 @@
+#pragma once
+/// Analytic obstacles (a half-space below a plane, a sphere) pressing on boundary triangles with
+/// the same clipping and penalty integration as the material-depth contact: the obstacle's depth
+/// g(x) (distance into the obstacle) is evaluated at triangle corners, interpolated linearly, and
+/// eps/2 g^2 integrated over the part of the triangle where it is positive.
+
+#include <variant>
+#include <vector>
+
+#include "core/force_module.hpp"
+#include "core/mesh.hpp"
+
+namespace depthfem {
+
+/// Everything below the plane through `point` with outward normal `normal` is solid.
+struct PlaneObstacle {
+  Vec3 point = Vec3::Zero();
+  Vec3 normal = Vec3::UnitZ();
+};
+/// A solid ball.
+struct SphereObstacle {
+  Vec3 center = Vec3::Zero();
+  double radius = 1;
+};
+
+/// An obstacle that moves rigidly by load x `motion` (displacement at full load [m]).
+struct Obstacle {
+  std::string name;
+  std::variant<PlaneObstacle, SphereObstacle> shape;
+  Vec3 motion = Vec3::Zero();
+  double penalty = 1e6;  ///< eps [Pa/m]
+};
+
+/// Contact of the boundary triangles of the listed bodies with analytic obstacles.
+class ObstacleContact final : public ForceModule {
+ public:
+  /// `bodies`: the bodies that touch the obstacles (their boundary triangles).
+  ObstacleContact(const Mesh& mesh, const std::vector<Index>& bodies, std::vector<Obstacle> obstacles);
+
+  std::string name() const override { return "obstacles"; }
+  void begin_step(const Points& x, double load) override;
+  void prepare(const Points& x) override;
+  void add_couplings(SparsityBuilder& builder) const override;
+  bool pattern_changed() const override { return false; }
+  double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
+
+  /// Force the obstacles exert on the bodies [N] and the area pressed [m^2] at x.
+  Vec3 total_force(const Points& x) const;
+  double contact_area(const Points& x) const;
+
+ private:
+  template <class S, class Corner>
+  S triangle_energy(const Obstacle& o, const Corner& Q) const;
+
+  TriIndices tris_;
+  std::vector<Obstacle> obstacles_;
+  double load_ = 0;
+  std::vector<std::pair<Index, Index>> active_;  // (obstacle, triangle) with some corner inside
+};
+
+}  // namespace depthfem

@@ -1,0 +1,147 @@
+// The contact force modules: no forces at rest, exact derivatives of the assembled energy,
+// continuity of material-depth forces against the node-to-surface baseline.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "contact/material_depth.hpp"
+#include "contact/material_depth_contact.hpp"
+#include "contact/node_to_surface_contact.hpp"
+#include "contact/obstacle_contact.hpp"
+#include "core/mesh_generators.hpp"
+
+namespace depthfem {
+namespace {
+
+struct Evaluated {
+  double energy = 0;
+  VectorX gradient;
+  Eigen::SparseMatrix<double> hessian;
+  BlockSparseMatrix pattern;  // stays bound to the module for its later prepare() calls
+};
+
+// Energy, gradient and Hessian of a module at x, with a pattern built for the pairs at x.
+void evaluate(ForceModule& m, const Points& x, Evaluated& out) {
+  m.prepare(x);
+  SparsityBuilder b(static_cast<Index>(x.rows()));
+  m.add_couplings(b);
+  out.pattern = BlockSparseMatrix(b);
+  m.bind(out.pattern);
+  out.gradient = VectorX::Zero(3 * x.rows());
+  out.energy = m.evaluate(x, &out.gradient, &out.pattern);
+  out.hessian = out.pattern.to_sparse();
+}
+
+TEST(MaterialDepthContact, UndeformedBodiesWithSelfContactHaveNoContactForces) {
+  Mesh m;
+  m.add_body("ball", ball_mesh({Vec3::Zero(), 0.5, 6}));
+  m.add_body("box", box_mesh({Vec3(1, 0, 0), Vec3(2, 0.5, 0.3), Eigen::Vector3i(6, 3, 2)}));
+  MaterialDepthContact c(m, material_depth(m), {1e6, true});
+  c.begin_step(m.X, 0);
+  Evaluated r;
+  evaluate(c, m.X, r);
+  EXPECT_EQ(r.energy, 0.0);
+  EXPECT_EQ(r.gradient.cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(r.hessian.coeffs().size() ? r.hessian.coeffs().cwiseAbs().maxCoeff() : 0.0, 0.0);
+  EXPECT_GT(c.stats().candidates, 0) << "neighbouring elements must have been examined";
+}
+
+// Two boxes overlapping by a third of the upper one's height, with self-contact on; random
+// perturbations make every clip case appear. Finite differences re-run the pair search.
+TEST(MaterialDepthContact, AssembledDerivativesMatchFiniteDifferences) {
+  Mesh m;
+  m.add_body("low", box_mesh({Vec3(0, 0, 0), Vec3(1, 1, 0.4), Eigen::Vector3i(4, 4, 2)}));
+  m.add_body("high", box_mesh({Vec3(0.23, 0.17, 0.3), Vec3(0.83, 0.77, 0.6), Eigen::Vector3i(3, 3, 2)}));
+  MaterialDepthContact c(m, material_depth(m), {1e5, true});
+  c.begin_step(m.X, 0);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-0.02, 0.02);
+  Points x = m.X;
+  for (Index i = 0; i < x.size(); ++i) x(i) += u(rng);
+  Evaluated r;
+  evaluate(c, x, r);
+  ASSERT_GT(r.energy, 0);
+  ASSERT_GT(c.stats().active, 20);
+  const double h = 1e-7;
+  VectorX fd(r.gradient.size());
+  for (Index i = 0; i < x.size(); ++i) {
+    Points xp = x, xm = x;
+    xp(i / 3, i % 3) += h;
+    xm(i / 3, i % 3) -= h;
+    c.prepare(xp);
+    const double ep = c.evaluate(xp, nullptr, nullptr);
+    c.prepare(xm);
+    fd(i) = (ep - c.evaluate(xm, nullptr, nullptr)) / (2 * h);
+  }
+  EXPECT_LE((r.gradient - fd).cwiseAbs().maxCoeff(), 1e-6 * r.gradient.cwiseAbs().maxCoeff());
+  std::normal_distribution<double> n;
+  VectorX v(x.size());
+  for (Index i = 0; i < v.size(); ++i) v(i) = n(rng);
+  const Points dir = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(v.data(), x.rows(), 3);
+  VectorX gp = VectorX::Zero(v.size()), gm = VectorX::Zero(v.size());
+  c.prepare(x + h * dir);
+  c.evaluate(x + h * dir, &gp, nullptr);
+  c.prepare(x - h * dir);
+  c.evaluate(x - h * dir, &gm, nullptr);
+  const VectorX Hv = r.hessian * v;
+  EXPECT_LE((Hv - (gp - gm) / (2 * h)).cwiseAbs().maxCoeff(), 1e-5 * Hv.cwiseAbs().maxCoeff());
+}
+
+// A flat plate sliding over a faceted ball at constant penetration, in N and 2N steps. The
+// material-depth force is a continuous function of the position: its largest change between
+// steps halves with the step. The node-to-surface force jumps whenever a node's nearest
+// triangle changes: its largest change does not shrink.
+double largest_jump(ForceModule& m, const Mesh& mesh, Index plate_first_node, int steps) {
+  double jump = 0;
+  VectorX previous;
+  for (int k = 0; k <= steps; ++k) {
+    Points x = mesh.X;
+    x.bottomRows(mesh.num_nodes() - plate_first_node).col(0).array() += -0.2 + 0.4 * k / steps;
+    m.begin_step(x, 0);
+    m.prepare(x);
+    VectorX g = VectorX::Zero(3 * x.rows());
+    m.evaluate(x, &g, nullptr);
+    if (k > 0) jump = std::max(jump, (g - previous).cwiseAbs().maxCoeff());
+    previous = g;
+  }
+  return jump;
+}
+
+TEST(ContactContinuity, MaterialDepthForcesAreContinuousAndNodeToSurfaceForcesJump) {
+  Mesh m;
+  m.add_body("ball", ball_mesh({Vec3::Zero(), 0.5, 6}));
+  m.add_body("plate", box_mesh({Vec3(-0.25, -0.25, 0.46), Vec3(0.25, 0.25, 0.6), Eigen::Vector3i(10, 10, 2)}));
+  const Index first = m.bodies[1].first_node;
+  MaterialDepthContact depth(m, material_depth(m), {1e5, false});
+  NodeToSurfaceContact baseline(m, 1e5);
+  const double d1 = largest_jump(depth, m, first, 40), d2 = largest_jump(depth, m, first, 80);
+  const double b1 = largest_jump(baseline, m, first, 40), b2 = largest_jump(baseline, m, first, 80);
+  RecordProperty("material_depth_jumps", std::to_string(d1) + " " + std::to_string(d2));
+  RecordProperty("node_to_surface_jumps", std::to_string(b1) + " " + std::to_string(b2));
+  EXPECT_GT(d1, 0);
+  EXPECT_LT(d2 / d1, 0.6) << "material depth: " << d1 << " -> " << d2;
+  EXPECT_GT(b2 / b1, 0.8) << "node to surface: " << b1 << " -> " << b2;
+}
+
+TEST(ObstacleContact, PlaneForceMatchesClosedForm) {
+  // A 1 x 1 plate whose bottom face is d = 0.01 below the plane z = 0. The obstacle depth is
+  // linear, so clipping and integration are exact: the bottom carries pressure eps d on unit
+  // area, and the four side walls (perimeter 4) dip into the obstacle with depth falling from d
+  // to 0: energy eps/2 (d^2 + 4 d^3 / 3), upward force eps (d + 4 d^2 / 2), area 1 + 4 d.
+  const double eps = 1e6, d = 0.01;
+  const Mesh m = single_body_mesh(box_mesh({Vec3(0, 0, -d), Vec3(1, 1, 0.2), Eigen::Vector3i(4, 4, 2)}));
+  ObstacleContact o(m, {0}, {{"floor", PlaneObstacle{Vec3::Zero(), Vec3::UnitZ()}, Vec3::Zero(), eps}});
+  o.begin_step(m.X, 0);
+  o.prepare(m.X);
+  EXPECT_LE((o.total_force(m.X) - Vec3(0, 0, eps * (d + 2 * d * d))).norm(), 1e-8);
+  EXPECT_NEAR(o.contact_area(m.X), 1 + 4 * d, 1e-12);
+  EXPECT_NEAR(o.evaluate(m.X, nullptr, nullptr), eps / 2 * (d * d + 4 * d * d * d / 3), 1e-9);
+  // The obstacle moves with the load factor: at load 1 the plane has risen by d, doubling depths.
+  ObstacleContact moving(m, {0}, {{"floor", PlaneObstacle{Vec3::Zero(), Vec3::UnitZ()}, Vec3(0, 0, d), eps}});
+  moving.begin_step(m.X, 1.0);
+  moving.prepare(m.X);
+  EXPECT_NEAR(moving.total_force(m.X)(2), eps * (2 * d + 2 * 4 * d * d), 1e-8);
+}
+
+}  // namespace
+}  // namespace depthfem
