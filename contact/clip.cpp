@@ -71,6 +71,15 @@ void snap_to_zero(double* d, int n, double tol) {
     if (std::abs(d[i]) <= tol) d[i] = 0;
 }
 
+// Of the two tets sharing a face, the one whose outward normal points to the lexicographically
+// negative side owns the face (their normals are opposite). Near-zero components count as zero.
+bool owns_face(const Vec3& normal) {
+  const double tol = 1e-12 * normal.norm();
+  for (int k = 0; k < 3; ++k)
+    if (std::abs(normal(k)) > tol) return normal(k) < 0;
+  return false;
+}
+
 ClipPolygon to_polygon(const Labelled* p, int n) {
   ClipPolygon out;
   out.size = n;
@@ -105,6 +114,13 @@ ClipPolygon clip_triangle_by_tet(const std::array<Vec3, 4>& P, const std::array<
     double d[8];
     for (int i = 0; i < n; ++i) d[i] = normal.dot(Pi - cur[i].x);
     snap_to_zero(d, n, kSnap * std::pow(normal.norm(), 1.5));
+    if (std::all_of(d, d + n, [](double v) { return v == 0; })) {
+      // The polygon lies in the face plane. The face is shared by two tets (or is on the
+      // boundary, where the depth is zero): count it for exactly one of them, so that a
+      // triangle lying on an inner face is not integrated twice.
+      if (!owns_face(normal)) return ClipPolygon{};
+      continue;
+    }
     n = clip(cur, n, d, f, next);
     std::swap(cur, next);
   }

@@ -33,7 +33,9 @@ struct ClipPolygon {
 inline constexpr int kTetFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 
 /// Clips triangle Q by the four face planes of the positively oriented tet P (Sutherland-Hodgman
-/// on labelled vertices). Points on a plane count as inside. size < 3 means no area in common.
+/// on labelled vertices). Points on a plane (up to rounding) count as inside, except that a
+/// polygon lying in a face plane belongs to only one of the two tets sharing that face.
+/// size < 3 means no area in common.
 ClipPolygon clip_triangle_by_tet(const std::array<Vec3, 4>& P, const std::array<Vec3, 3>& Q);
 
 /// Clips triangle Q to where the linear interpolant of the vertex values g is >= 0 (an

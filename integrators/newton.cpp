@@ -11,9 +11,30 @@ Points as_points(const VectorX& v) {
 }
 }  // namespace
 
+bool NewtonSolver::line_search(Points& x, const Points& step, double energy, double residual) {
+  VectorX g_trial;
+  double alpha = 1.0;
+  for (int k = 0; k <= options_.max_line_search; ++k, alpha *= 0.5) {
+    const Points trial = x + alpha * step;
+    system_.prepare(trial);
+    const double e = system_.gradient(trial, g_trial);
+    if (!std::isfinite(e)) continue;
+    constraints_.project(g_trial);
+    const double r = g_trial.norm();
+    // Energy rule: a drop in energy, or, where the energies agree to round-off, in residual.
+    const bool lower_energy = e < energy || (e <= energy + 1e-12 * std::abs(energy) && r < residual);
+    if (options_.line_search == LineSearchRule::kEnergy ? lower_energy : r < residual) {
+      x = trial;
+      return true;
+    }
+  }
+  system_.prepare(x);
+  return false;
+}
+
 NewtonResult NewtonSolver::solve(Points& x) {
   NewtonResult result;
-  VectorX g, g_trial, dx;
+  VectorX g, dx;
   system_.prepare(x);
   double energy = system_.hessian(x, g);
   if (!std::isfinite(energy)) {
@@ -46,27 +67,19 @@ NewtonResult NewtonSolver::solve(Points& x) {
       result.failure = "the linear solver failed (" + to_string(linear_.options().kind) + ")";
       return result;
     }
-    const Points step = as_points(dx);
-    double alpha = 1.0;
-    bool accepted = false;
-    for (int k = 0; k <= options_.max_line_search; ++k, alpha *= 0.5) {
-      const Points trial = x + alpha * step;
-      system_.prepare(trial);
-      const double e = system_.gradient(trial, g_trial);
-      if (!std::isfinite(e)) continue;
-      constraints_.project(g_trial);
-      const double r = g_trial.norm();
-      // Energy rule: a drop in energy, or, where the energies agree to round-off, in residual.
-      const bool lower_energy = e < energy || (e <= energy + 1e-12 * std::abs(energy) && r < residual);
-      if (options_.line_search == LineSearchRule::kEnergy ? lower_energy : r < residual) {
-        x = trial;
-        accepted = true;
-        break;
-      }
+    // Line search along the Newton direction; if it is not a descent direction (an indefinite
+    // Hessian) or finds no acceptable step, along the Jacobi-scaled gradient instead.
+    const bool energy_rule = options_.line_search == LineSearchRule::kEnergy;
+    bool accepted = (!energy_rule || g.dot(dx) < 0) && line_search(x, as_points(dx), energy, residual);
+    if (!accepted) {
+      const VectorX d = H.diagonal().cwiseAbs().cwiseMax(1e-300);
+      dx = -g.cwiseQuotient(d);
+      accepted = line_search(x, as_points(dx), energy, residual);
     }
     ++result.iterations;
     if (!accepted) {
-      result.failure = "line search found no legal step that lowers the residual " + std::to_string(residual) + " N";
+      result.failure = std::string("line search found no legal step that lowers the ") +
+                       (energy_rule ? "energy" : "residual") + " (residual " + std::to_string(residual) + " N)";
       return result;
     }
     energy = system_.hessian(x, g);

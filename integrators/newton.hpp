@@ -41,7 +41,9 @@ struct NewtonResult {
 /// (finite energy) and the line-search rule holds (the paper's damping factor). The paper asks
 /// for a lower residual; in bending that rejects good Newton steps (a linearised rotation
 /// stretches fibers, so the full step raises the residual while it lowers the energy, and Newton
-/// crawls), so the default asks for a lower energy.
+/// crawls), so the default asks for a lower energy. Where the Newton direction is not a descent
+/// direction (an indefinite Hessian: buckling, deep contact) or its search fails, the step falls
+/// back to the Jacobi-scaled gradient.
 class NewtonSolver {
  public:
   NewtonSolver(System& system, const Constraints& constraints, NewtonOptions options)
@@ -53,6 +55,9 @@ class NewtonSolver {
   NewtonOptions& options() { return options_; }
 
  private:
+  /// Halves the step until the rule holds; moves x and returns true, or leaves x and returns false.
+  bool line_search(Points& x, const Points& step, double energy, double residual);
+
   System& system_;
   const Constraints& constraints_;
   NewtonOptions options_;

@@ -29,7 +29,9 @@ void StaticSolver::run(Points& x, const std::function<void(const StaticStep&)>& 
       trial = x + (target - load) / (load - previous_load) * (x - previous);
     }
     constraints_.impose(target, trial);
+    if (viscosity_) viscosity_->set_anchor(x);
     system_.begin_step(x, target);
+    system_.prepare(trial);
     if (!std::isfinite(system_.energy(trial))) {  // predictor (or boundary motion) inverted a tet
       trial = x;
       constraints_.impose(target, trial);
@@ -38,7 +40,6 @@ void StaticSolver::run(Points& x, const std::function<void(const StaticStep&)>& 
         return false;
       }
     }
-    if (viscosity_) viscosity_->set_anchor(x);
     NewtonResult r = newton_.solve(trial);
     if (!r.converged) {
       last_failure = r.failure;
