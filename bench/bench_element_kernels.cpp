@@ -1,8 +1,8 @@
 // Element kernel throughput: structure-of-arrays vs array-of-structures, 1 and 2 threads,
-// energy + gradient + 12x12 Hessian and gradient only, and full assembly into CSR.
+// energy + gradient + 12x12 Hessian and gradient only, and full assembly into the block-CSR matrix.
 //
-//   build/bench/bench_element_kernels --benchmark_counters_tabular=true \
-//       --benchmark_out=kernels.json --benchmark_out_format=json
+//   build/bench/bench_element_kernels --benchmark_counters_tabular=true
+//       (add --benchmark_out=kernels.json --benchmark_out_format=json for a file)
 //
 // Counter `tets_per_s` is tets per second over all threads; `per_core` divides by threads.
 #include <benchmark/benchmark.h>
