@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 
 #include "apps/scene_runner.hpp"
 #include "core/lumped_mass.hpp"
@@ -59,6 +61,41 @@ TEST(ContactScenes, SlidingBlockConvergesAtEveryStep) {
   }
   // The slider carries a downward load: the drive pushes it into the base.
   EXPECT_LT(r.steps.back().reactions(1, 2), 0);
+}
+
+// A rigid body (no material, no unknowns) driven by a boundary condition on its body pushes a
+// deformable block: its nodes follow the prescribed motion exactly, and the block's base carries
+// the contact force.
+TEST(ContactScenes, RigidBodyWithPrescribedMotionPressesADeformableBlock) {
+  const std::string path = (std::filesystem::temp_directory_path() / "depthfem_rigid_press.json").string();
+  std::ofstream(path) << R"({
+    "bodies": [
+      {"name": "block", "mesh": {"generator": "box", "lo": [0, 0, 0], "hi": [1, 1, 0.3], "cells": [5, 5, 3]},
+       "material": {"model": "neo_hookean", "youngs": 1e5, "poisson": 0.3}},
+      {"name": "stamp", "mesh": {"generator": "box", "lo": [0.33, 0.31, 0.3], "hi": [0.67, 0.71, 0.5], "cells": [3, 3, 2]},
+       "rigid": true}
+    ],
+    "contact": {"model": "material_depth", "penalty": 1e7, "self_contact": false},
+    "boundary": [
+      {"name": "base", "type": "fixed", "nodes": {"plane": {"normal": [0, 0, 1], "offset": 0}}},
+      {"name": "press", "type": "displaced", "displacement": [0, 0, -0.03], "nodes": {"body": "stamp"}}
+    ],
+    "solver": {"initial_increment": 0.25}
+  })";
+  const Scene s = load_scene(path);
+  std::filesystem::remove(path);
+  ASSERT_EQ(s.groups.size(), 1u);  // the rigid body has no elasticity
+  const RunResult r = run(s);
+  ASSERT_TRUE(r.success) << r.message;
+  const Body& stamp = s.mesh.bodies[1];
+  for (Index i = stamp.first_node; i < stamp.first_node + stamp.num_nodes; ++i)
+    EXPECT_LE((r.x.row(i) - s.mesh.X.row(i) - Eigen::RowVector3d(0, 0, -0.03)).norm(), 1e-14);
+  // Condition rows: stamp_rigid (0), base (1), press (2). The base pushes up, the press down,
+  // and they balance (no other forces act).
+  const auto& R = r.steps.back().reactions;
+  EXPECT_GT(R(1, 2), 0);
+  EXPECT_NEAR(R(1, 2) + R(2, 2), 0.0, 1e-6 * R(1, 2));
+  EXPECT_GT(*r.steps.back().contact_area, 0.1);
 }
 
 }  // namespace
