@@ -14,6 +14,7 @@ namespace depthfem {
 /// reference state stays stress-free. The fiber direction f is given per element.
 template <class Base>
 struct FiberReinforced {
+  using BaseMaterial = Base;
   Base base;
   double alpha = 0;  ///< fiber stiffness [Pa]
   double beta = 0;   ///< fiber stiffening rate [-]

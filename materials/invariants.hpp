@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cmath>
 
 namespace depthfem {
 
@@ -29,6 +30,16 @@ struct InvariantDerivatives {
 
 /// Slots of (I1, I2, J, I4) in InvariantDerivatives.
 enum InvariantSlot : int { kI1 = 0, kI2 = 1, kJ = 2, kI4 = 3 };
+
+/// Adds the volumetric barrier a (J^2 - 1) - 2 k ln J (= a (I3 - 1) - k ln I3) and its J
+/// derivatives to e (up to order kOrder). It tends to +infinity as J -> 0; with k chosen so that
+/// psi_1 + 2 psi_2 + psi_3 = 0 at F = I it makes an invariant model stress-free.
+template <int kOrder>
+void add_volumetric_barrier(InvariantDerivatives& e, double J, double a, double k) {
+  e.psi += a * (J * J - 1) - 2.0 * k * std::log(J);
+  if constexpr (kOrder >= 1) e.d(kJ) += 2.0 * a * J - 2.0 * k / J;
+  if constexpr (kOrder >= 2) e.d2(kJ, kJ) += 2.0 * a + 2.0 * k / (J * J);
+}
 
 /// Cofactor matrix dJ/dF = J F^-T, computed from cross products of the columns of F.
 inline Eigen::Matrix3d cofactor(const Eigen::Matrix3d& F) {

@@ -18,28 +18,15 @@ void require_stable(const LinearizedModuli& m, const char* model) {
   }
 }
 
-template <class T>
-struct Name;
-template <>
-struct Name<NeoHookean> {
-  static std::string get() { return "neo_hookean"; }
-};
-template <>
-struct Name<MooneyRivlin> {
-  static std::string get() { return "mooney_rivlin"; }
-};
-template <>
-struct Name<Veronda> {
-  static std::string get() { return "veronda"; }
-};
-template <>
-struct Name<NearlyIncompressibleMooneyRivlin> {
-  static std::string get() { return "nearly_incompressible_mooney_rivlin"; }
-};
-template <class Base>
-struct Name<FiberReinforced<Base>> {
-  static std::string get() { return "fiber_" + Name<Base>::get(); }
-};
+// "fiber_" + the base model's name for fiber-reinforced models, the model's kName otherwise.
+template <class M>
+std::string name_of() {
+  if constexpr (requires { typename M::BaseMaterial; }) {
+    return "fiber_" + name_of<typename M::BaseMaterial>();
+  } else {
+    return M::kName;
+  }
+}
 }  // namespace
 
 void NeoHookean::validate() const {
@@ -72,7 +59,7 @@ void NearlyIncompressibleMooneyRivlin::validate() const {
 }
 
 std::string material_name(const MaterialModel& m) {
-  return std::visit([](const auto& x) { return Name<std::decay_t<decltype(x)>>::get(); }, m);
+  return std::visit([](const auto& x) { return name_of<std::decay_t<decltype(x)>>(); }, m);
 }
 
 bool material_uses_fiber(const MaterialModel& m) {

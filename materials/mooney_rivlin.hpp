@@ -17,22 +17,20 @@ struct MooneyRivlin {
 
   static constexpr bool kUsesI2 = true;
   static constexpr bool kUsesFiber = false;
+  static constexpr const char* kName = "mooney_rivlin";
 
   /// Throws std::invalid_argument unless C1, C2 >= 0, C1 + C2 > 0 and the rest state is stable.
   void validate() const;
 
   template <int kOrder>
   InvariantDerivatives evaluate(const Invariants& inv) const {
-    // In J: a (J^2 - 1) - 2 k ln J, k = C1 + 2 C2 + a.
-    const double k = C1 + 2.0 * C2 + a;
     InvariantDerivatives e;
-    e.psi = C1 * (inv.I1 - 3) + C2 * (inv.I2 - 3) + a * (inv.J * inv.J - 1) - 2.0 * k * std::log(inv.J);
+    e.psi = C1 * (inv.I1 - 3) + C2 * (inv.I2 - 3);
     if constexpr (kOrder >= 1) {
       e.d(kI1) = C1;
       e.d(kI2) = C2;
-      e.d(kJ) = 2.0 * a * inv.J - 2.0 * k / inv.J;
     }
-    if constexpr (kOrder >= 2) e.d2(kJ, kJ) = 2.0 * a + 2.0 * k / (inv.J * inv.J);
+    add_volumetric_barrier<kOrder>(e, inv.J, a, C1 + 2.0 * C2 + a);
     return e;
   }
 };

@@ -18,6 +18,7 @@ struct NearlyIncompressibleMooneyRivlin {
 
   static constexpr bool kUsesI2 = true;
   static constexpr bool kUsesFiber = false;
+  static constexpr const char* kName = "nearly_incompressible_mooney_rivlin";
 
   /// Throws std::invalid_argument unless C1, C2 >= 0, C1 + C2 > 0 and kappa > 0.
   void validate() const;

@@ -14,6 +14,7 @@ struct NeoHookean {
 
   static constexpr bool kUsesI2 = false;
   static constexpr bool kUsesFiber = false;
+  static constexpr const char* kName = "neo_hookean";
 
   /// Lame parameters from Young's modulus E [Pa] and Poisson's ratio nu (-1 < nu < 0.5).
   static NeoHookean from_youngs(double E, double nu);

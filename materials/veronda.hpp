@@ -28,27 +28,22 @@ struct Veronda {
 
   static constexpr bool kUsesI2 = true;
   static constexpr bool kUsesFiber = false;
+  static constexpr const char* kName = "veronda";
 
   /// Throws std::invalid_argument unless alpha > 0, beta >= 0 and the rest state is stable.
   void validate() const;
 
   template <int kOrder>
   InvariantDerivatives evaluate(const Invariants& inv) const {
-    // In J (I3 = J^2): a (J^2 - 1) - 2 k ln J.
-    const double k = a + 2.0 * alpha + 2.0 * alpha * beta;
     const double ex = std::exp(inv.I1 - 3);
     InvariantDerivatives e;
-    e.psi = 2.0 * alpha * (ex - 1) + alpha * beta * (inv.I2 - 3) + a * (inv.J * inv.J - 1) -
-            2.0 * k * std::log(inv.J);
+    e.psi = 2.0 * alpha * (ex - 1) + alpha * beta * (inv.I2 - 3);
     if constexpr (kOrder >= 1) {
       e.d(kI1) = 2.0 * alpha * ex;
       e.d(kI2) = alpha * beta;
-      e.d(kJ) = 2.0 * a * inv.J - 2.0 * k / inv.J;
     }
-    if constexpr (kOrder >= 2) {
-      e.d2(kI1, kI1) = 2.0 * alpha * ex;
-      e.d2(kJ, kJ) = 2.0 * a + 2.0 * k / (inv.J * inv.J);
-    }
+    if constexpr (kOrder >= 2) e.d2(kI1, kI1) = 2.0 * alpha * ex;
+    add_volumetric_barrier<kOrder>(e, inv.J, a, a + 2.0 * alpha + 2.0 * alpha * beta);
     return e;
   }
 };

@@ -18,7 +18,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from render import (  # noqa: E402
-    ToolError, is_dynamic, open_results, run_main, scene_name, step_names)
+    is_dynamic, open_results, run_main, save_figure, scene_name, step_names)
 
 
 def read_series(path):
@@ -49,11 +49,7 @@ def plot_series(path, out):
         ax.grid(True, alpha=0.3)
     fig.suptitle(f"{name}: {len(load)} steps" if name else f"{len(load)} steps")
     fig.tight_layout()
-    try:
-        fig.savefig(out, dpi=150)
-    except OSError as error:
-        raise ToolError(f"{out}: cannot write ({error.strerror})") from None
-    plt.close(fig)
+    save_figure(fig, out)
 
 
 def main(argv):

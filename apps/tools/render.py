@@ -135,6 +135,11 @@ def render(path, out, step=None, view=(25.0, -60.0), color="displacement", refer
     if color == "body":
         bar.set_ticks(range(len(body_names)), labels=body_names)
     ax.set_title(title)
+    save_figure(fig, out)
+
+
+def save_figure(fig, out):
+    """Writes the figure as a 150 dpi PNG and closes it; ToolError if it cannot be written."""
     try:
         fig.savefig(out, dpi=150)
     except OSError as error:
