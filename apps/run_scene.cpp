@@ -74,6 +74,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   if (scene.gravity.norm() > 0) {
     system.add(std::make_unique<Gravity>(lumped_mass(mesh.X, mesh.tets, scene.tet_density), scene.gravity));
   }
+  NodalSpring* inertia = nullptr;
+  if (scene.analysis == "dynamic") {
+    inertia = &system.add(std::make_unique<NodalSpring>("inertia", lumped_mass(mesh.X, mesh.tets, scene.tet_density)));
+  }
   NodalSpring* viscosity = nullptr;
   if (scene.quasi_viscosity > 0) {
     viscosity = &system.add(std::make_unique<NodalSpring>(
@@ -111,40 +115,58 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
       << to_string(opt.newton.linear.kind) << ", Newton tolerance " << format("%.3g", opt.newton.tolerance) << " N\n";
 
   result.x = mesh.X;
-  StaticSolver solver(system, constraints, viscosity, opt);
+  // One completed step (static increment or time step): summary, progress line, results file.
+  const auto record = [&](Index index, double load, const char* tag, const NewtonResult& newton, double seconds,
+                          const Points& x, const Points* v, const VectorX& gradient) {
+    StepSummary sum{load, newton.iterations, newton.linear_iterations, newton.energy, newton.residuals.back(),
+                    constraints.reactions(gradient)};
+    if (contact) {
+      sum.contact_area = contact->stats().area;
+      sum.contact_force = contact_force(*contact, x);
+      sum.max_depth = contact->stats().max_depth;
+    }
+    if (obstacles) {
+      sum.contact_area = sum.contact_area.value_or(0) + obstacles->contact_area(x);
+      sum.contact_force = sum.contact_force.value_or(0) + obstacles->total_force(x).norm();
+    }
+    log << format("step %4d  %s %.4f%s  newton %2d  linear %5d  residual %.3e  energy % .6e  %.2f s\n", int(index),
+                  v ? "time" : "load", load, tag, sum.newton_iterations, sum.linear_iterations, sum.residual,
+                  sum.energy, seconds);
+    if (file) {
+      StepRecord rec;
+      rec.index = index;
+      rec.load = load;
+      rec.x = &x;
+      rec.v = v;
+      rec.newton_iterations = sum.newton_iterations;
+      rec.linear_iterations = sum.linear_iterations;
+      rec.energy = sum.energy;
+      rec.seconds = seconds;
+      rec.residuals = newton.residuals;
+      rec.reactions = sum.reactions;
+      rec.contact_area = sum.contact_area;
+      rec.contact_force = sum.contact_force;
+      file->append_step(rec);
+    }
+    result.steps.push_back(std::move(sum));
+  };
   try {
-    solver.run(result.x, [&](const StaticStep& s) {
-      StepSummary sum{s.load, s.newton.iterations, s.newton.linear_iterations, s.newton.energy,
-                      s.newton.residuals.back(), constraints.reactions(s.gradient)};
-      if (contact) {
-        sum.contact_area = contact->stats().area;
-        sum.contact_force = contact_force(*contact, *s.x);
-        sum.max_depth = contact->stats().max_depth;
-      }
-      if (obstacles) {
-        sum.contact_area = sum.contact_area.value_or(0) + obstacles->contact_area(*s.x);
-        sum.contact_force = sum.contact_force.value_or(0) + obstacles->total_force(*s.x).norm();
-      }
-      log << format("step %4d  load %.4f%s  newton %2d  linear %5d  residual %.3e  energy % .6e  %.2f s\n",
-                    int(s.index), s.load, s.settling ? " (settle)" : "", sum.newton_iterations,
-                    sum.linear_iterations, sum.residual, sum.energy, s.seconds);
-      if (file) {
-        StepRecord rec;
-        rec.index = s.index;
-        rec.load = s.load;
-        rec.x = s.x;
-        rec.newton_iterations = sum.newton_iterations;
-        rec.linear_iterations = sum.linear_iterations;
-        rec.energy = sum.energy;
-        rec.seconds = s.seconds;
-        rec.residuals = s.newton.residuals;
-        rec.reactions = sum.reactions;
-        rec.contact_area = sum.contact_area;
-        rec.contact_force = sum.contact_force;
-        file->append_step(rec);
-      }
-      result.steps.push_back(std::move(sum));
-    });
+    if (scene.analysis == "dynamic") {
+      DynamicOptions dyn = scene.dynamic_options;
+      dyn.newton.tolerance = opt.newton.tolerance;
+      Points v = scene.initial_velocity;
+      const VectorX& mass = inertia->stiffness();
+      ImplicitEuler(system, constraints, *inertia, dyn).run(result.x, v, [&](const DynamicStep& s) {
+        record(s.index, s.time, "", s.newton, s.seconds, *s.x, s.v, s.gradient);
+        StepSummary& sum = result.steps.back();
+        sum.kinetic_energy = 0.5 * (mass.array() * s.v->rowwise().squaredNorm().array()).sum();
+        sum.potential_energy = s.newton.energy - inertia->evaluate(*s.x, nullptr, nullptr);
+      });
+    } else {
+      StaticSolver(system, constraints, viscosity, opt).run(result.x, [&](const StaticStep& s) {
+        record(s.index, s.load, s.settling ? " (settle)" : "", s.newton, s.seconds, *s.x, nullptr, s.gradient);
+      });
+    }
     result.success = true;
   } catch (const SolveError& e) {
     result.message = e.what();

@@ -25,6 +25,8 @@ struct StepSummary {
   std::optional<double> contact_area;   ///< [m^2], with contact or obstacles
   std::optional<double> contact_force;  ///< [N]: obstacle force + sum over pairs of |pair force|
   double max_depth = 0;                 ///< deepest interpolated penetration depth [m]
+  double kinetic_energy = 0;            ///< dynamic runs: sum m |v|^2 / 2 [J]
+  double potential_energy = 0;          ///< dynamic runs: E(x) without the inertia term [J]
 };
 
 /// Outcome of a run. On failure `message` says why; completed steps are kept.

@@ -253,11 +253,14 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
   scene.name = r.string("name", std::filesystem::path(path).stem().string());
   r.ignore("description");
   scene.analysis = r.string("analysis", "static");
-  if (scene.analysis != "static") r.fail("analysis", "unknown analysis '" + scene.analysis + "' (expected static)");
+  if (scene.analysis != "static" && scene.analysis != "dynamic") {
+    r.fail("analysis", "unknown analysis '" + scene.analysis + "' (expected static or dynamic)");
+  }
   scene.gravity = r.vec3("gravity", Vec3::Zero());
 
   const std::string dir = std::filesystem::path(path).parent_path().string();
   std::vector<double> density;
+  std::vector<Vec3> velocity;
   for (JsonObject b : r.objects("bodies")) {
     const std::string name = b.string("name");
     for (const Body& existing : scene.mesh.bodies)
@@ -282,10 +285,13 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
     }
     const double rho = b.number("density", 1000.0);
     if (!(rho > 0)) b.fail("density", "must be > 0");
+    velocity.insert(velocity.end(), static_cast<size_t>(body.num_nodes), b.vec3("velocity", Vec3::Zero()));
     b.finish();
     density.insert(density.end(), static_cast<size_t>(body.num_tets), rho);
   }
   if (scene.mesh.bodies.empty()) r.fail("bodies", "a scene needs at least one body");
+  scene.initial_velocity.resize(scene.mesh.num_nodes(), 3);
+  for (Index i = 0; i < scene.mesh.num_nodes(); ++i) scene.initial_velocity.row(i) = velocity[i].transpose();
   scene.tet_density = Eigen::Map<VectorX>(density.data(), static_cast<Eigen::Index>(density.size()));
 
   if (r.has("boundary")) {
@@ -298,6 +304,18 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
     for (size_t k = 0; k < list.size(); ++k) scene.obstacles.push_back(read_obstacle(list[k], k));
   }
   if (r.has("solver")) read_solver(r.object("solver"), scene);
+  if (r.has("dynamic")) {
+    if (scene.analysis != "dynamic") r.fail("dynamic", "only for \"analysis\": \"dynamic\"");
+    JsonObject d = r.object("dynamic");
+    scene.dynamic_options.time_step = d.number("time_step");
+    scene.dynamic_options.duration = d.number("duration");
+    if (!(scene.dynamic_options.time_step > 0)) d.fail("time_step", "must be > 0");
+    if (!(scene.dynamic_options.duration >= scene.dynamic_options.time_step)) d.fail("duration", "must be >= time_step");
+    d.finish();
+  } else if (scene.analysis == "dynamic") {
+    r.fail("dynamic", "missing required key for a dynamic analysis");
+  }
+  scene.dynamic_options.newton = scene.static_options.newton;
   r.finish();
   return scene;
 }
