@@ -123,7 +123,6 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     if (contact) {
       sum.contact_area = contact->stats().area;
       sum.contact_force = contact_force(*contact, x);
-      sum.max_depth = contact->stats().max_depth;
     }
     if (obstacles) {
       sum.contact_area = sum.contact_area.value_or(0) + obstacles->contact_area(x);

@@ -24,7 +24,6 @@ struct StepSummary {
   Eigen::Matrix<double, Eigen::Dynamic, 3> reactions;  ///< per boundary condition [N]
   std::optional<double> contact_area;   ///< [m^2], with contact or obstacles
   std::optional<double> contact_force;  ///< [N]: obstacle force + sum over pairs of |pair force|
-  double max_depth = 0;                 ///< deepest interpolated penetration depth [m]
   double kinetic_energy = 0;            ///< dynamic runs: sum m |v|^2 / 2 [J]
   double potential_energy = 0;          ///< dynamic runs: E(x) without the inertia term [J]
 };

@@ -70,13 +70,6 @@ void MaterialDepthContact::prepare(const Points& x) {
   }
   stats_.active = static_cast<Index>(pairs_.size());
   for (const ContactPair& p : pairs_) {
-    const std::array<Vec3, 4> P = tet_corners(x, tets_, p.tet);
-    const Mat3 D = (Mat3() << P[1] - P[0], P[2] - P[0], P[3] - P[0]).finished();
-    const Vec3 dg(depth_(tets_(p.tet, 1)) - depth_(tets_(p.tet, 0)), depth_(tets_(p.tet, 2)) - depth_(tets_(p.tet, 0)),
-                  depth_(tets_(p.tet, 3)) - depth_(tets_(p.tet, 0)));
-    const Vec3 a = D.transpose().inverse() * dg;
-    for (int k = 0; k < p.polygon.size; ++k)
-      stats_.max_depth = std::max(stats_.max_depth, depth_(tets_(p.tet, 0)) + a.dot(p.polygon.x[k] - P[0]));
     for (int k = 1; k + 1 < p.polygon.size; ++k)
       stats_.area += 0.5 * (p.polygon.x[k] - p.polygon.x[0]).cross(p.polygon.x[k + 1] - p.polygon.x[0]).norm();
   }

@@ -28,7 +28,6 @@ struct ContactStats {
   Index candidates = 0;      ///< triangle-tet pairs whose boxes overlap
   Index active = 0;          ///< pairs with an intersection polygon
   double area = 0;           ///< total intersection area [m^2]
-  double max_depth = 0;      ///< largest interpolated depth at a polygon vertex [m]
 };
 
 /// The contact force module. Geometry (tree, clipping, depth lookup) lives in aabb_tree, clip
@@ -50,7 +49,6 @@ class MaterialDepthContact final : public ForceModule {
 
   const std::vector<ContactPair>& pairs() const { return pairs_; }
   ContactStats stats() const { return stats_; }
-  const VectorX& depth() const { return depth_; }
 
   /// Energy, gradient (21) and Hessian (21 x 21) of one pair; variables: tet corners 0..11,
   /// triangle corners 12..20.

@@ -64,7 +64,6 @@ class Constraints {
   Eigen::Matrix<double, Eigen::Dynamic, 3> reactions(const VectorX& g) const;
 
   const std::vector<Constraint>& list() const { return list_; }
-  bool is_constrained(Index node) const { return slot_.size() && slot_[node] >= 0; }
 
  private:
   struct NodeState {

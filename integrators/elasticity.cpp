@@ -141,10 +141,4 @@ Index Elasticity::first_inverted(const Points& x) const {
   return -1;
 }
 
-Index Elasticity::num_tets() const {
-  Index n = 0;
-  for (const Group& grp : groups_) n += grp.block.size();
-  return n;
-}
-
 }  // namespace depthfem

@@ -33,9 +33,6 @@ class Elasticity final : public ForceModule {
   /// Global id of the first tet (in group order) with det F <= 0 at x, or -1 if none.
   Index first_inverted(const Points& x) const;
 
-  /// Number of tets over all groups.
-  Index num_tets() const;
-
  private:
   struct Group {
     MaterialModel material;

@@ -19,7 +19,6 @@ class NodalSpring final : public ForceModule {
 
   /// Sets the anchor positions a (#nodes x 3).
   void set_anchor(const Points& anchor) { anchor_ = anchor; }
-  const Points& anchor() const { return anchor_; }
   /// Scales every stiffness k_i by `factor` (e.g. a new time step).
   void set_scale(double factor) { scale_ = factor; }
   const VectorX& stiffness() const { return k_; }
