@@ -14,6 +14,7 @@
 #include "contact/material_depth.hpp"
 #include "contact/node_to_surface_contact.hpp"
 #include "integrators/gravity.hpp"
+#include "integrators/symplectic_euler.hpp"
 
 namespace depthfem {
 
@@ -75,7 +76,9 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     system.add(std::make_unique<Gravity>(lumped_mass(mesh.X, mesh.tets, scene.tet_density), scene.gravity));
   }
   NodalSpring* inertia = nullptr;
-  if (scene.analysis == "dynamic") {
+  const bool implicit_dynamics =
+      scene.analysis == "dynamic" && scene.dynamic_options.integrator == Integrator::kImplicitEuler;
+  if (implicit_dynamics) {
     inertia = &system.add(std::make_unique<NodalSpring>("inertia", lumped_mass(mesh.X, mesh.tets, scene.tet_density)));
   }
   NodalSpring* viscosity = nullptr;
@@ -150,7 +153,18 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     result.steps.push_back(std::move(sum));
   };
   try {
-    if (scene.analysis == "dynamic") {
+    if (scene.analysis == "dynamic" && !implicit_dynamics) {
+      const VectorX mass = lumped_mass(mesh.X, mesh.tets, scene.tet_density);
+      Points v = scene.initial_velocity;
+      SymplecticEuler stepper(system, constraints, mass, scene.dynamic_options,
+                              critical_time_step(mesh.X, mesh.tets, scene.tet_density, scene.groups));
+      stepper.run(result.x, v, [&](const DynamicStep& s) {
+        record(s.index, s.time, "", s.newton, s.seconds, *s.x, s.v, s.gradient);
+        StepSummary& sum = result.steps.back();
+        sum.kinetic_energy = 0.5 * (mass.array() * s.v->rowwise().squaredNorm().array()).sum();
+        sum.potential_energy = s.newton.energy;
+      });
+    } else if (implicit_dynamics) {
       DynamicOptions dyn = scene.dynamic_options;
       dyn.newton.tolerance = opt.newton.tolerance;
       Points v = scene.initial_velocity;

@@ -307,6 +307,14 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
   if (r.has("dynamic")) {
     if (scene.analysis != "dynamic") r.fail("dynamic", "only for \"analysis\": \"dynamic\"");
     JsonObject d = r.object("dynamic");
+    const std::string integrator = d.string("integrator", "implicit_euler");
+    if (integrator == "implicit_euler") {
+      scene.dynamic_options.integrator = Integrator::kImplicitEuler;
+    } else if (integrator == "symplectic_euler") {
+      scene.dynamic_options.integrator = Integrator::kSymplecticEuler;
+    } else {
+      d.fail("integrator", "unknown integrator '" + integrator + "' (expected implicit_euler or symplectic_euler)");
+    }
     scene.dynamic_options.time_step = d.number("time_step");
     scene.dynamic_options.duration = d.number("duration");
     if (!(scene.dynamic_options.time_step > 0)) d.fail("time_step", "must be > 0");

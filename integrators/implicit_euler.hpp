@@ -10,7 +10,11 @@
 
 namespace depthfem {
 
+/// Time integration scheme of a dynamic analysis.
+enum class Integrator { kImplicitEuler, kSymplecticEuler };
+
 struct DynamicOptions {
+  Integrator integrator = Integrator::kImplicitEuler;
   double time_step = 1e-2;  ///< h [s]
   double duration = 1.0;    ///< simulated time [s]; prescribed motions ramp with t / duration
   NewtonOptions newton;

@@ -1,0 +1,73 @@
+#include "integrators/symplectic_euler.hpp"
+
+#include <chrono>
+#include <cmath>
+
+#include "core/error.hpp"
+#include "core/tet_mesh.hpp"
+
+namespace depthfem {
+
+double critical_time_step(const Points& X, const TetIndices& tets, const VectorX& tet_density,
+                          const std::vector<ElasticGroup>& groups) {
+  double h = std::numeric_limits<double>::infinity();
+  for (const ElasticGroup& group : groups) {
+    const LinearizedModuli mod = material_moduli(group.material);
+    for (Index t : group.tets) {
+      const Vec3 p[4] = {X.row(tets(t, 0)), X.row(tets(t, 1)), X.row(tets(t, 2)), X.row(tets(t, 3))};
+      double largest_face = 0;
+      for (int f = 0; f < 4; ++f) {
+        const Vec3& a = p[(f + 1) % 4];
+        largest_face = std::max(largest_face, 0.5 * (p[(f + 2) % 4] - a).cross(p[(f + 3) % 4] - a).norm());
+      }
+      const double length = 3 * signed_volume(p[0], p[1], p[2], p[3]) / largest_face;
+      const double speed = std::sqrt((mod.lambda + 2 * mod.mu) / tet_density(t));
+      h = std::min(h, length / speed);
+    }
+  }
+  return h;
+}
+
+SymplecticEuler::SymplecticEuler(System& system, const Constraints& constraints, VectorX mass, DynamicOptions options,
+                                 double critical_step)
+    : system_(system), constraints_(constraints), mass_(std::move(mass)), options_(options) {
+  if (options_.time_step > critical_step) {
+    throw InputError("symplectic_euler: time step " + std::to_string(options_.time_step) +
+                     " s exceeds the stable limit " + std::to_string(critical_step) +
+                     " s of this mesh (smallest element altitude / wave speed)");
+  }
+}
+
+void SymplecticEuler::run(Points& x, Points& v, const std::function<void(const DynamicStep&)>& on_step) {
+  const double h = options_.time_step;
+  const Index steps = static_cast<Index>(std::ceil(options_.duration / h - 1e-9));
+  VectorX g;
+  for (Index n = 0; n < steps; ++n) {
+    const auto start = std::chrono::steady_clock::now();
+    const double t = (n + 1) * h;
+    system_.prepare(x);
+    const double energy = system_.gradient(x, g);
+    if (!std::isfinite(energy)) {
+      throw SolveError("time step " + std::to_string(n) + " (t = " + std::to_string(t) +
+                       " s): an element inverted (the explicit step is too large for this motion)");
+    }
+    for (Index i = 0; i < x.rows(); ++i) v.row(i) -= (h / mass_(i)) * g.segment<3>(3 * i).transpose();
+    const Points before = x;
+    x += h * v;
+    constraints_.impose(t / options_.duration, x);
+    v = (x - before) / h;  // constrained nodes move as prescribed
+    DynamicStep step;
+    step.index = n;
+    step.time = t;
+    step.newton.converged = true;
+    step.newton.energy = energy;
+    step.newton.residuals.push_back(0.0);
+    step.x = &x;
+    step.v = &v;
+    system_.gradient(x, step.gradient);
+    step.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    on_step(step);
+  }
+}
+
+}  // namespace depthfem

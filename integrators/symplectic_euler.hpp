@@ -1,0 +1,38 @@
+#pragma once
+/// Explicit comparator: symplectic (semi-implicit) Euler on lumped masses,
+///   v^{n+1} = v^n - h M^-1 grad E(x^n),  x^{n+1} = x^n + h v^{n+1},
+/// stable only below the critical time step of the mesh, which is estimated and enforced.
+
+#include <functional>
+
+#include "integrators/constraints.hpp"
+#include "integrators/elasticity.hpp"
+#include "integrators/implicit_euler.hpp"
+#include "integrators/system.hpp"
+
+namespace depthfem {
+
+/// Critical time step estimate [s]: min over tets of l_e / c_e, with l_e = 3 V / (largest face
+/// area) the smallest altitude and c_e = sqrt((lambda + 2 mu) / rho) the dilatational wave speed
+/// of the tet's material at small strain (the usual explicit-dynamics bound).
+double critical_time_step(const Points& X, const TetIndices& tets, const VectorX& tet_density,
+                          const std::vector<ElasticGroup>& groups);
+
+/// Symplectic Euler over a System (its modules must not include inertia).
+class SymplecticEuler {
+ public:
+  /// Throws InputError when options.time_step exceeds `critical_step`.
+  SymplecticEuler(System& system, const Constraints& constraints, VectorX mass, DynamicOptions options,
+                  double critical_step);
+
+  /// Advances (x, v) to the end time; calls on_step after every step (newton fields left empty).
+  void run(Points& x, Points& v, const std::function<void(const DynamicStep&)>& on_step);
+
+ private:
+  System& system_;
+  const Constraints& constraints_;
+  VectorX mass_;
+  DynamicOptions options_;
+};
+
+}  // namespace depthfem
