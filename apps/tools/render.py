@@ -131,7 +131,7 @@ def render(path, out, step=None, view=(25.0, -60.0), color="displacement", refer
     )
     set_equal_axes(ax, np.vstack([x, X]) if reference else x)
     ax.view_init(elev=view[0], azim=view[1])
-    bar = fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, shrink=0.6, label=label)
+    bar = fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, shrink=0.6, pad=0.12, label=label)
     if color == "body":
         bar.set_ticks(range(len(body_names)), labels=body_names)
     ax.set_title(title)
