@@ -7,9 +7,27 @@
 
 namespace depthfem {
 
+Index time_step_count(const DynamicOptions& options) {
+  return static_cast<Index>(std::ceil(options.duration / options.time_step - 1e-9));
+}
+
+void report_time_step(System& system, Index index, double t, NewtonResult newton, const Points& x, const Points& v,
+                      std::chrono::steady_clock::time_point start,
+                      const std::function<void(const DynamicStep&)>& on_step) {
+  DynamicStep step;
+  step.index = index;
+  step.time = t;
+  step.newton = std::move(newton);
+  step.x = &x;
+  step.v = &v;
+  system.gradient(x, step.gradient);
+  step.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  on_step(step);
+}
+
 void ImplicitEuler::run(Points& x, Points& v, const std::function<void(const DynamicStep&)>& on_step) {
   const double h = options_.time_step;
-  const Index steps = static_cast<Index>(std::ceil(options_.duration / h - 1e-9));
+  const Index steps = time_step_count(options_);
   inertia_.set_scale(1.0 / (h * h));
   for (Index n = 0; n < steps; ++n) {
     const auto start = std::chrono::steady_clock::now();
@@ -25,15 +43,7 @@ void ImplicitEuler::run(Points& x, Points& v, const std::function<void(const Dyn
     }
     v = (next - x) / h;
     x = next;
-    DynamicStep step;
-    step.index = n;
-    step.time = t;
-    step.newton = std::move(r);
-    step.x = &x;
-    step.v = &v;
-    system_.gradient(x, step.gradient);
-    step.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    on_step(step);
+    report_time_step(system_, n, t, std::move(r), x, v, start, on_step);
   }
 }
 

@@ -3,6 +3,7 @@
 /// potential  sum_i m_i / (2 h^2) |x_i - (x_i^n + h v_i^n)|^2 + E(x)  with the same Newton core as
 /// static analysis; then v^{n+1} = (x^{n+1} - x^n) / h.
 
+#include <chrono>
 #include <functional>
 
 #include "integrators/newton.hpp"
@@ -30,6 +31,15 @@ struct DynamicStep {
   const Points* v = nullptr;
   VectorX gradient;  ///< gradient of the incremental potential at x, for reactions
 };
+
+/// Number of steps of size time_step that cover the duration.
+Index time_step_count(const DynamicOptions& options);
+
+/// Completes a step record for (x, v) at time t (gradient of the system at x, wall time since
+/// `start`) and passes it to on_step. Shared by the time integrators.
+void report_time_step(System& system, Index index, double t, NewtonResult newton, const Points& x, const Points& v,
+                      std::chrono::steady_clock::time_point start,
+                      const std::function<void(const DynamicStep&)>& on_step);
 
 /// Implicit Euler over a System. `inertia` is a NodalSpring inside the system with stiffness m_i;
 /// the stepper scales it by 1/h^2 and anchors it at the predicted positions x^n + h v^n.

@@ -40,7 +40,7 @@ SymplecticEuler::SymplecticEuler(System& system, const Constraints& constraints,
 
 void SymplecticEuler::run(Points& x, Points& v, const std::function<void(const DynamicStep&)>& on_step) {
   const double h = options_.time_step;
-  const Index steps = static_cast<Index>(std::ceil(options_.duration / h - 1e-9));
+  const Index steps = time_step_count(options_);
   VectorX g;
   for (Index n = 0; n < steps; ++n) {
     const auto start = std::chrono::steady_clock::now();
@@ -56,17 +56,11 @@ void SymplecticEuler::run(Points& x, Points& v, const std::function<void(const D
     x += h * v;
     constraints_.impose(t / options_.duration, x);
     v = (x - before) / h;  // constrained nodes move as prescribed
-    DynamicStep step;
-    step.index = n;
-    step.time = t;
-    step.newton.converged = true;
-    step.newton.energy = energy;
-    step.newton.residuals.push_back(0.0);
-    step.x = &x;
-    step.v = &v;
-    system_.gradient(x, step.gradient);
-    step.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    on_step(step);
+    NewtonResult explicit_step;  // no solve: converged by construction, energy at the start
+    explicit_step.converged = true;
+    explicit_step.energy = energy;
+    explicit_step.residuals.push_back(0.0);
+    report_time_step(system_, n, t, std::move(explicit_step), x, v, start, on_step);
   }
 }
 
