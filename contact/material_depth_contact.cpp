@@ -140,9 +140,11 @@ double MaterialDepthContact::evaluate(const Points& x, VectorX* gradient, BlockS
     for (Index k = r.begin(); k < r.end(); ++k) local[k] = pair_derivatives(x, pairs_[k]);
   });
   double energy = 0;
+  stats_.force = 0;
   for (Index k = 0; k < n; ++k) {
     const std::array<Index, 7> v = pair_nodes(pairs_[k]);
     energy += local[k].energy;
+    stats_.force += local[k].gradient.tail<9>().reshaped(3, 3).rowwise().sum().norm();
     for (int a = 0; a < 7; ++a) gradient->segment<3>(3 * v[a]) += local[k].gradient.segment<3>(3 * a);
     if (!hessian) continue;
     for (int a = 0; a < 7; ++a)

@@ -23,11 +23,13 @@ struct ContactPair {
   ClipPolygon polygon;
 };
 
-/// What the active pairs amount to at the last prepare().
+/// What the active pairs amount to at the last prepare() (and evaluate(), for the force).
 struct ContactStats {
   Index candidates = 0;      ///< triangle-tet pairs whose boxes overlap
   Index active = 0;          ///< pairs with an intersection polygon
   double area = 0;           ///< total intersection area [m^2]
+  double force = 0;          ///< sum over pairs of |penalty force on the triangle| [N], from the
+                             ///< last evaluation with a gradient
 };
 
 /// The contact force module. Geometry (tree, clipping, depth lookup) lives in aabb_tree, clip
@@ -71,7 +73,7 @@ class MaterialDepthContact final : public ForceModule {
   double min_area2_ = 0;
   AabbTree tree_;
   std::vector<ContactPair> pairs_;
-  ContactStats stats_;
+  mutable ContactStats stats_;  // evaluate() records the force it computes anyway
   const BlockSparseMatrix* bound_ = nullptr;
   bool pattern_changed_ = false;
 };
