@@ -6,6 +6,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/types.hpp"
@@ -32,6 +33,20 @@ class JsonObject {
   std::vector<Index> indices(const std::string& key);
   JsonObject object(const std::string& key);
   std::vector<JsonObject> objects(const std::string& key);
+  /// A string key naming one of `names` (the first is the default when the key is absent);
+  /// anything else fails with "unknown WHAT 'x' (expected a, b or c)".
+  template <class E>
+  E choice(const std::string& key, const std::string& what, std::initializer_list<std::pair<const char*, E>> names) {
+    const std::string value = string(key, names.begin()->first);
+    std::string expected;
+    size_t k = 0;
+    for (const auto& [name, e] : names) {
+      if (value == name) return e;
+      expected += (k == 0 ? "" : k + 1 == names.size() ? " or " : ", ") + std::string(name);
+      ++k;
+    }
+    fail(key, "unknown " + what + " '" + value + "' (expected " + expected + ")");
+  }
   /// Marks a key as known without reading it (free-text fields such as "description").
   void ignore(const std::string& key) { used_.insert(key); }
 

@@ -13,7 +13,10 @@
 #include "core/results_file.hpp"
 #include "contact/material_depth.hpp"
 #include "contact/node_to_surface_contact.hpp"
+#include "integrators/arkode_stepper.hpp"
 #include "integrators/gravity.hpp"
+#include "integrators/implicit_stepper.hpp"
+#include "integrators/stiffness_tether.hpp"
 #include "integrators/symplectic_euler.hpp"
 
 namespace depthfem {
@@ -64,15 +67,27 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   RunResult result;
   const Mesh& mesh = scene.mesh;
   System system(mesh.num_nodes(), result.timers);
-  system.add(std::make_unique<Elasticity>(mesh.X, mesh.tets, scene.groups));
-  if (scene.gravity.norm() > 0) {
-    system.add(std::make_unique<Gravity>(lumped_mass(mesh.X, mesh.tets, scene.tet_density), scene.gravity));
-  }
-  NodalSpring* inertia = nullptr;
-  const bool implicit_dynamics =
-      scene.analysis == "dynamic" && scene.dynamic_options.integrator == Integrator::kImplicitEuler;
-  if (implicit_dynamics) {
-    inertia = &system.add(std::make_unique<NodalSpring>("inertia", lumped_mass(mesh.X, mesh.tets, scene.tet_density)));
+  const Elasticity& elastic = system.add(std::make_unique<Elasticity>(mesh.X, mesh.tets, scene.groups));
+  const VectorX mass = lumped_mass(mesh.X, mesh.tets, scene.tet_density);
+  if (scene.gravity.norm() > 0) system.add(std::make_unique<Gravity>(mass, scene.gravity));
+  // Time-dependent analyses: the implicit schemes carry inertia and damping as tethers.
+  const bool time_dependent = scene.analysis != "static";
+  const DynamicOptions& dyn_in = scene.dynamic_options;
+  ImplicitTerms terms;
+  if (time_dependent && (dyn_in.integrator == Integrator::kImplicitEuler || dyn_in.integrator == Integrator::kNewmark)) {
+    if (scene.analysis == "dynamic") terms.inertia = &system.add(std::make_unique<NodalSpring>("inertia", mass));
+    if (scene.analysis == "quasistatic") {
+      terms.damping.push_back(&system.add(std::make_unique<NodalSpring>(
+          "viscosity", quasi_viscosity_stiffness(mesh.X, mesh.tets, scene.viscosity))));
+    }
+    if (dyn_in.damping.mass > 0) {
+      terms.damping.push_back(
+          &system.add(std::make_unique<NodalSpring>("mass damping", dyn_in.damping.mass * mass)));
+    }
+    if (dyn_in.damping.stiffness > 0) {
+      terms.damping.push_back(
+          &system.add(std::make_unique<StiffnessTether>("stiffness damping", elastic, dyn_in.damping.stiffness)));
+    }
   }
   NodalSpring* viscosity = nullptr;
   if (scene.quasi_viscosity > 0) {
@@ -146,28 +161,30 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     result.steps.push_back(std::move(sum));
   };
   try {
-    if (scene.analysis == "dynamic" && !implicit_dynamics) {
-      const VectorX mass = lumped_mass(mesh.X, mesh.tets, scene.tet_density);
-      Points v = scene.initial_velocity;
-      SymplecticEuler stepper(system, constraints, mass, scene.dynamic_options,
-                              critical_time_step(mesh.X, mesh.tets, scene.tet_density, scene.groups));
-      stepper.run(result.x, v, [&](const DynamicStep& s) {
-        record(s.index, s.time, "", s.newton, s.seconds, *s.x, s.v, s.gradient);
-        StepSummary& sum = result.steps.back();
-        sum.kinetic_energy = 0.5 * (mass.array() * s.v->rowwise().squaredNorm().array()).sum();
-        sum.potential_energy = s.newton.energy;
-      });
-    } else if (implicit_dynamics) {
-      DynamicOptions dyn = scene.dynamic_options;
+    if (time_dependent) {
+      DynamicOptions dyn = dyn_in;
       dyn.newton.tolerance = opt.newton.tolerance;
       Points v = scene.initial_velocity;
-      const VectorX& mass = inertia->stiffness();
-      ImplicitEuler(system, constraints, *inertia, dyn).run(result.x, v, [&](const DynamicStep& s) {
+      const auto on_step = [&](const DynamicStep& s) {
         record(s.index, s.time, "", s.newton, s.seconds, *s.x, s.v, s.gradient);
         StepSummary& sum = result.steps.back();
         sum.kinetic_energy = 0.5 * (mass.array() * s.v->rowwise().squaredNorm().array()).sum();
-        sum.potential_energy = s.newton.energy - inertia->evaluate(*s.x, nullptr, nullptr);
-      });
+        sum.potential_energy = s.potential_energy;
+      };
+      switch (dyn.integrator) {
+        case Integrator::kImplicitEuler:
+        case Integrator::kNewmark:
+          ImplicitStepper(system, constraints, terms, dyn).run(result.x, v, on_step);
+          break;
+        case Integrator::kSymplecticEuler:
+          SymplecticEuler(system, constraints, mass, dyn,
+                          critical_time_step(mesh.X, mesh.tets, scene.tet_density, scene.groups))
+              .run(result.x, v, on_step);
+          break;
+        case Integrator::kArkode:
+          ArkodeStepper(system, constraints, mass, dyn).run(result.x, v, on_step);
+          break;
+      }
     } else {
       StaticSolver(system, constraints, viscosity, opt).run(result.x, [&](const StaticStep& s) {
         record(s.index, s.load, s.settling ? " (settle)" : "", s.newton, s.seconds, *s.x, nullptr, s.gradient);

@@ -136,14 +136,9 @@ Constraint read_constraint(JsonObject c, const Mesh& mesh, size_t index) {
 }
 
 void read_contact(JsonObject c, Scene& scene) {
-  const std::string model = c.string("model", "material_depth");
-  if (model == "material_depth") {
-    scene.contact = ContactModel::kMaterialDepth;
-  } else if (model == "node_to_surface") {
-    scene.contact = ContactModel::kNodeToSurface;
-  } else {
-    c.fail("model", "unknown contact model '" + model + "' (expected material_depth or node_to_surface)");
-  }
+  scene.contact = c.choice<ContactModel>(
+      "model", "contact model",
+      {{"material_depth", ContactModel::kMaterialDepth}, {"node_to_surface", ContactModel::kNodeToSurface}});
   scene.contact_options.penalty = c.number("penalty");
   scene.contact_options.self_contact = c.boolean("self_contact", true);
   if (!(scene.contact_options.penalty > 0)) c.fail("penalty", "must be > 0");
@@ -170,25 +165,61 @@ Obstacle read_obstacle(JsonObject o, size_t index) {
   return out;
 }
 
+void read_dynamic(JsonObject d, Scene& scene) {
+  DynamicOptions& o = scene.dynamic_options;
+  o.integrator = d.choice<Integrator>("integrator", "integrator",
+                                      {{"implicit_euler", Integrator::kImplicitEuler},
+                                       {"newmark", Integrator::kNewmark},
+                                       {"symplectic_euler", Integrator::kSymplecticEuler},
+                                       {"arkode", Integrator::kArkode}});
+  o.time_step = d.number("time_step");
+  o.duration = d.number("duration");
+  if (!(o.time_step > 0)) d.fail("time_step", "must be > 0");
+  if (!(o.duration >= o.time_step)) d.fail("duration", "must be >= time_step");
+  const bool explicit_scheme = o.integrator == Integrator::kSymplecticEuler || o.integrator == Integrator::kArkode;
+  if (scene.analysis == "quasistatic") {
+    // Viscous flow without inertia: only implicit Euler, and the viscosity is what resists motion.
+    if (o.integrator != Integrator::kImplicitEuler) d.fail("integrator", "a quasistatic analysis uses implicit_euler");
+    scene.viscosity = d.number("viscosity");
+    if (!(scene.viscosity > 0)) d.fail("viscosity", "must be > 0");
+  }
+  if (d.has("damping")) {
+    JsonObject c = d.object("damping");
+    o.damping.mass = c.number("mass", 0.0);
+    o.damping.stiffness = c.number("stiffness", 0.0);
+    if (!(o.damping.mass >= 0)) c.fail("mass", "must be >= 0");
+    if (!(o.damping.stiffness >= 0)) c.fail("stiffness", "must be >= 0");
+    if (o.damping.stiffness > 0 && explicit_scheme) c.fail("stiffness", "needs an implicit integrator");
+    c.finish();
+  }
+  if (d.has("arkode")) {
+    if (o.integrator != Integrator::kArkode) d.fail("arkode", "only for \"integrator\": \"arkode\"");
+    JsonObject a = d.object("arkode");
+    o.arkode.order = a.integer("order", o.arkode.order);
+    o.arkode.relative_tolerance = a.number("relative_tolerance", o.arkode.relative_tolerance);
+    o.arkode.absolute_tolerance = a.number("absolute_tolerance", o.arkode.absolute_tolerance);
+    o.arkode.max_steps = a.integer("max_steps", static_cast<int>(o.arkode.max_steps));
+    if (o.arkode.order < 2 || o.arkode.order > 8 || o.arkode.order == 7) a.fail("order", "must be 2, 3, 4, 5, 6 or 8");
+    if (!(o.arkode.relative_tolerance > 0)) a.fail("relative_tolerance", "must be > 0");
+    if (!(o.arkode.absolute_tolerance > 0)) a.fail("absolute_tolerance", "must be > 0");
+    if (!(o.arkode.max_steps > 0)) a.fail("max_steps", "must be > 0");
+    a.finish();
+  }
+  d.finish();
+}
+
 void read_solver(JsonObject s, Scene& scene) {
   StaticOptions& o = scene.static_options;
-  try {
-    o.newton.linear.kind = parse_linear_solver(s.string("linear_solver", "direct"));
-  } catch (const std::invalid_argument& e) {
-    s.fail("linear_solver", e.what());
-  }
+  o.newton.linear.kind = s.choice<LinearSolverKind>("linear_solver", "linear solver",
+                                                     {{"direct", LinearSolverKind::kDirect},
+                                                      {"gmres", LinearSolverKind::kGmres},
+                                                      {"cg", LinearSolverKind::kCg}});
   o.newton.linear.tolerance = s.number("linear_tolerance", o.newton.linear.tolerance);
   o.newton.linear.max_iterations = s.integer("linear_max_iterations", o.newton.linear.max_iterations);
   o.newton.max_iterations = s.integer("max_newton_iterations", o.newton.max_iterations);
   o.newton.max_line_search = s.integer("max_line_search", o.newton.max_line_search);
-  const std::string rule = s.string("line_search", "energy");
-  if (rule == "energy") {
-    o.newton.line_search = LineSearchRule::kEnergy;
-  } else if (rule == "residual") {
-    o.newton.line_search = LineSearchRule::kResidual;
-  } else {
-    s.fail("line_search", "unknown rule '" + rule + "' (expected energy or residual)");
-  }
+  o.newton.line_search = s.choice<LineSearchRule>(
+      "line_search", "rule", {{"energy", LineSearchRule::kEnergy}, {"residual", LineSearchRule::kResidual}});
   o.initial_increment = s.number("initial_increment", o.initial_increment);
   o.min_increment = s.number("min_increment", o.min_increment);
   o.max_increment = s.number("max_increment", o.max_increment);
@@ -253,8 +284,8 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
   scene.name = r.string("name", std::filesystem::path(path).stem().string());
   r.ignore("description");
   scene.analysis = r.string("analysis", "static");
-  if (scene.analysis != "static" && scene.analysis != "dynamic") {
-    r.fail("analysis", "unknown analysis '" + scene.analysis + "' (expected static or dynamic)");
+  if (scene.analysis != "static" && scene.analysis != "dynamic" && scene.analysis != "quasistatic") {
+    r.fail("analysis", "unknown analysis '" + scene.analysis + "' (expected static, dynamic or quasistatic)");
   }
   scene.gravity = r.vec3("gravity", Vec3::Zero());
 
@@ -305,23 +336,10 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
   }
   if (r.has("solver")) read_solver(r.object("solver"), scene);
   if (r.has("dynamic")) {
-    if (scene.analysis != "dynamic") r.fail("dynamic", "only for \"analysis\": \"dynamic\"");
-    JsonObject d = r.object("dynamic");
-    const std::string integrator = d.string("integrator", "implicit_euler");
-    if (integrator == "implicit_euler") {
-      scene.dynamic_options.integrator = Integrator::kImplicitEuler;
-    } else if (integrator == "symplectic_euler") {
-      scene.dynamic_options.integrator = Integrator::kSymplecticEuler;
-    } else {
-      d.fail("integrator", "unknown integrator '" + integrator + "' (expected implicit_euler or symplectic_euler)");
-    }
-    scene.dynamic_options.time_step = d.number("time_step");
-    scene.dynamic_options.duration = d.number("duration");
-    if (!(scene.dynamic_options.time_step > 0)) d.fail("time_step", "must be > 0");
-    if (!(scene.dynamic_options.duration >= scene.dynamic_options.time_step)) d.fail("duration", "must be >= time_step");
-    d.finish();
-  } else if (scene.analysis == "dynamic") {
-    r.fail("dynamic", "missing required key for a dynamic analysis");
+    if (scene.analysis == "static") r.fail("dynamic", "only for a dynamic or quasistatic analysis");
+    read_dynamic(r.object("dynamic"), scene);
+  } else if (scene.analysis != "static") {
+    r.fail("dynamic", "missing required key for a " + scene.analysis + " analysis");
   }
   scene.dynamic_options.newton = scene.static_options.newton;
   r.finish();

@@ -10,7 +10,7 @@
 #include "core/mesh.hpp"
 #include "integrators/constraints.hpp"
 #include "integrators/elasticity.hpp"
-#include "integrators/implicit_euler.hpp"
+#include "integrators/dynamics.hpp"
 #include "integrators/static_solver.hpp"
 
 namespace depthfem {
@@ -36,7 +36,8 @@ struct Scene {
   double quasi_viscosity = 0;         ///< [Pa]; 0: off
   double tolerance = 1e-9;            ///< relative Newton tolerance (see scene docs)
   StaticOptions static_options;
-  DynamicOptions dynamic_options;     ///< analysis "dynamic": implicit Euler
+  DynamicOptions dynamic_options;     ///< analyses "dynamic" and "quasistatic"
+  double viscosity = 0;               ///< [Pa s] of a quasistatic analysis
   Points initial_velocity;            ///< #nodes x 3 [m/s]
 };
 

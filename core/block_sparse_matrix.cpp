@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <stdexcept>
 
 namespace depthfem {
 
@@ -37,6 +38,11 @@ Index BlockSparseMatrix::block_index(Index i, Index j) const {
   const auto it = std::lower_bound(first, last, j);
   if (it == last || *it != j) return -1;
   return static_cast<Index>(it - col_.begin());
+}
+
+void BlockSparseMatrix::add_scaled(const BlockSparseMatrix& B, double s) {
+  if (B.col_ != col_ || B.row_begin_ != row_begin_) throw std::logic_error("add_scaled: the patterns differ");
+  for (size_t k = 0; k < values_.size(); ++k) values_[k] += s * B.values_[k];
 }
 
 void BlockSparseMatrix::multiply(const VectorX& x, VectorX& y) const {

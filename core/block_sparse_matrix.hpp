@@ -61,6 +61,8 @@ class BlockSparseMatrix {
       for (int d = 0; d < 3; ++d) v[3 * c + d] += B(c, d);
   }
 
+  /// A += s B for a matrix B with the same pattern.
+  void add_scaled(const BlockSparseMatrix& B, double s);
   /// y = A x (TBB-parallel over block rows; deterministic).
   void multiply(const VectorX& x, VectorX& y) const;
   /// The scalar diagonal (3 * #nodes).

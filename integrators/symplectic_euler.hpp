@@ -1,13 +1,14 @@
 #pragma once
-/// Explicit comparator: symplectic (semi-implicit) Euler on lumped masses,
-///   v^{n+1} = v^n - h M^-1 grad E(x^n),  x^{n+1} = x^n + h v^{n+1},
+/// Explicit comparator: symplectic (semi-implicit) Euler on lumped masses with optional
+/// mass-proportional damping alpha,
+///   v^{n+1} = v^n - h (M^-1 grad E(x^n) + alpha v^n),  x^{n+1} = x^n + h v^{n+1},
 /// stable only below the critical time step of the mesh, which is estimated and enforced.
 
 #include <functional>
 
 #include "integrators/constraints.hpp"
 #include "integrators/elasticity.hpp"
-#include "integrators/implicit_euler.hpp"
+#include "integrators/dynamics.hpp"
 #include "integrators/system.hpp"
 
 namespace depthfem {
@@ -21,12 +22,13 @@ double critical_time_step(const Points& X, const TetIndices& tets, const VectorX
 /// Symplectic Euler over a System (its modules must not include inertia).
 class SymplecticEuler {
  public:
-  /// Throws InputError when options.time_step exceeds `critical_step`.
+  /// Throws InputError when options.time_step exceeds `critical_step` or stiffness-proportional
+  /// damping is requested.
   SymplecticEuler(System& system, const Constraints& constraints, VectorX mass, DynamicOptions options,
                   double critical_step);
 
   /// Advances (x, v) to the end time; calls on_step after every step (newton fields left empty).
-  void run(Points& x, Points& v, const std::function<void(const DynamicStep&)>& on_step);
+  void run(Points& x, Points& v, const StepCallback& on_step);
 
  private:
   System& system_;
