@@ -170,6 +170,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
         StepSummary& sum = result.steps.back();
         sum.kinetic_energy = 0.5 * (mass.array() * s.v->rowwise().squaredNorm().array()).sum();
         sum.potential_energy = s.potential_energy;
+        if (options.observer) options.observer(sum, *s.x);
       };
       switch (dyn.integrator) {
         case Integrator::kImplicitEuler:
@@ -188,6 +189,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     } else {
       StaticSolver(system, constraints, viscosity, opt).run(result.x, [&](const StaticStep& s) {
         record(s.index, s.load, s.settling ? " (settle)" : "", s.newton, s.seconds, *s.x, nullptr, s.gradient);
+        if (options.observer) options.observer(result.steps.back(), *s.x);
       });
     }
     result.success = true;

@@ -1,6 +1,7 @@
 #pragma once
 /// Running a scene: builds its force modules, drives the solver, writes the results file.
 
+#include <functional>
 #include <optional>
 #include <ostream>
 #include <string>
@@ -11,9 +12,14 @@
 
 namespace depthfem {
 
+struct StepSummary;
+
 struct RunOptions {
   std::string out;   ///< results file (.h5); empty: no file
   int threads = 0;   ///< 0: all cores
+  /// Called after every completed step with its summary and positions (e.g. to sample a
+  /// trajectory without writing a file).
+  std::function<void(const StepSummary&, const Points& x)> observer;
 };
 
 /// Per-step summary kept in memory (the results file has everything).
@@ -25,7 +31,7 @@ struct StepSummary {
   std::optional<double> contact_area;   ///< [m^2], with contact or obstacles
   std::optional<double> contact_force;  ///< [N]: obstacle force + sum over pairs of |pair force|
   double kinetic_energy = 0;            ///< dynamic runs: sum m |v|^2 / 2 [J]
-  double potential_energy = 0;          ///< dynamic runs: E(x) without the inertia term [J]
+  double potential_energy = 0;          ///< dynamic runs: E(x) without inertia and damping [J]
 };
 
 /// Outcome of a run. On failure `message` says why; completed steps are kept.

@@ -84,6 +84,29 @@ TEST_F(SceneFileTest, BadValuesAreNamed) {
   EXPECT_NE(error("{\"bodies\": [").find("scene.json: invalid JSON"), std::string::npos);
 }
 
+TEST_F(SceneFileTest, TimeIntegrationSettingsAreChecked) {
+  const auto set = [](const std::string& a, const std::string& d) {
+    return std::vector<Override>{parse_override("analysis=" + a), parse_override("dynamic=" + d)};
+  };
+  EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "rk4", "time_step": 1, "duration": 1})"))
+                .find("dynamic.integrator: unknown integrator 'rk4' (expected implicit_euler, newmark, symplectic_euler or arkode)"),
+            std::string::npos);
+  EXPECT_NE(error(kValid, set("quasistatic", R"({"time_step": 1, "duration": 1})")).find("dynamic.viscosity: missing"),
+            std::string::npos);
+  EXPECT_NE(error(kValid, set("quasistatic", R"({"integrator": "newmark", "time_step": 1, "duration": 1, "viscosity": 1})"))
+                .find("dynamic.integrator: a quasistatic analysis uses implicit_euler"),
+            std::string::npos);
+  EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "symplectic_euler", "time_step": 1, "duration": 1,
+                                             "damping": {"stiffness": 0.1}})"))
+                .find("dynamic.damping.stiffness: needs an implicit integrator"),
+            std::string::npos);
+  EXPECT_NE(error(kValid, set("dynamic", R"({"time_step": 1, "duration": 1, "arkode": {"order": 4}})"))
+                .find("dynamic.arkode: only for \"integrator\": \"arkode\""),
+            std::string::npos);
+  EXPECT_NE(error(kValid, {parse_override("analysis=dynamic")}).find("dynamic: missing required key for a dynamic analysis"),
+            std::string::npos);
+}
+
 TEST_F(SceneFileTest, OverridesReachNestedKeys) {
   const Scene s = load_scene(write(kValid), {parse_override("bodies.0.mesh.cells=[2,1,1]"),
                                              parse_override("solver.linear_solver=gmres")});

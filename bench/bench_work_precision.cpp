@@ -1,0 +1,139 @@
+// Work-precision study on falling_bars: every time integrator at a ladder of step sizes (or
+// tolerances for ARKODE); error = largest distance, over the output times (every 10 ms) and the
+// tip nodes of the three bars, from a reference run of ARKODE's 8th-order method at a relative
+// tolerance of 1e-11; work = wall time of the run.
+//
+//   build/bench/bench_work_precision [--out bench/results/work_precision.csv] [--duration 2.0]
+//                                    [--set PATH=VALUE ...]
+//
+// --set overrides scene keys as in `depthfem run` (e.g. stiffer bars for a second study).
+// Plot with bench/plot_work_precision.py. A second, independent reference (ARKODE order 5 at
+// 1e-10) is run too: its distance from the first is printed and written as the row
+// "reference_check", a bound on the reference error.
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "apps/run_scene.hpp"
+
+using namespace depthfem;
+
+namespace {
+
+constexpr double kSampleInterval = 0.01;  // [s]
+
+struct Trajectory {
+  std::vector<Points> tips;  // tip positions at t = k * kSampleInterval, k = 1, 2, ...
+  double seconds = 0;
+  long steps = 0;            // time steps, or ARKODE's internal steps
+  long newton = 0;           // Newton iterations (implicit schemes)
+  std::string failure;
+};
+
+Trajectory run_case(const std::string& scene_path, std::vector<Override> o, const std::vector<std::string>& overrides) {
+  for (const std::string& s : overrides) o.push_back(parse_override(s));
+  const Scene scene = load_scene(scene_path, o);
+  std::vector<Index> tip;
+  for (Index i = 0; i < scene.mesh.num_nodes(); ++i)
+    if (std::abs(scene.mesh.X(i, 0) - 1.0) < 1e-9) tip.push_back(i);
+  Trajectory t;
+  const bool explicit_rk = scene.dynamic_options.integrator == Integrator::kArkode;
+  RunOptions options;
+  options.threads = 1;
+  options.observer = [&](const StepSummary& s, const Points& x) {
+    t.steps += explicit_rk ? s.newton_iterations : 1;
+    if (!explicit_rk) t.newton += s.newton_iterations;
+    const double k = s.load / kSampleInterval;
+    if (std::abs(k - std::round(k)) > 1e-6) return;
+    Points p(static_cast<Index>(tip.size()), 3);
+    for (size_t j = 0; j < tip.size(); ++j) p.row(static_cast<Index>(j)) = x.row(tip[j]);
+    t.tips.push_back(std::move(p));
+  };
+  std::ostringstream log;
+  const RunResult r = run_scene(scene, options, log);
+  t.seconds = r.seconds;
+  if (!r.success) t.failure = r.message;
+  return t;
+}
+
+double max_distance(const Trajectory& a, const Trajectory& ref) {
+  if (a.tips.size() != ref.tips.size()) return std::numeric_limits<double>::infinity();
+  double e = 0;
+  for (size_t k = 0; k < a.tips.size(); ++k) e = std::max(e, (a.tips[k] - ref.tips[k]).rowwise().norm().maxCoeff());
+  return e;
+}
+
+std::string number(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string out = "bench/results/work_precision.csv";
+  double duration = 2.0;
+  std::vector<Override> scene_overrides;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--out" && i + 1 < argc) {
+      out = argv[++i];
+    } else if (a == "--duration" && i + 1 < argc) {
+      duration = std::stod(argv[++i]);
+    } else if (a == "--set" && i + 1 < argc) {
+      scene_overrides.push_back(parse_override(argv[++i]));
+    } else {
+      std::cerr << "usage: bench_work_precision [--out FILE.csv] [--duration SECONDS] [--set PATH=VALUE ...]\n";
+      return 2;
+    }
+  }
+  const std::string scene = std::string(DEPTHFEM_SOURCE_DIR) + "/apps/scenes/falling_bars.json";
+  const std::string span = "dynamic.duration=" + number(duration);
+  const auto arkode = [&](int order, double rtol) {
+    return std::vector<std::string>{span, "dynamic.time_step=0.01", "dynamic.integrator=arkode",
+                                    "dynamic.arkode={\"order\": " + std::to_string(order) +
+                                        ", \"relative_tolerance\": " + number(rtol) +
+                                        ", \"absolute_tolerance\": " + number(rtol * 1e-2) + "}"};
+  };
+  const auto stepped = [&](const char* integrator, double h) {
+    return std::vector<std::string>{span, std::string("dynamic.integrator=") + integrator,
+                                    "dynamic.time_step=" + number(h)};
+  };
+
+  std::cout << "reference: ARKODE order 8, relative tolerance 1e-11 ..." << std::endl;
+  const Trajectory ref = run_case(scene, scene_overrides, arkode(8, 1e-11));
+  if (!ref.failure.empty()) {
+    std::cerr << "bench_work_precision: the reference run failed: " << ref.failure << "\n";
+    return 1;
+  }
+  std::ofstream csv(out);
+  if (!csv) {
+    std::cerr << "bench_work_precision: cannot write " << out << "\n";
+    return 1;
+  }
+  csv << "integrator,setting,value,steps,newton_iterations,wall_s,max_tip_error_m,status\n";
+  const auto row = [&](const std::string& name, const std::string& setting, double value, const Trajectory& t) {
+    const double err = max_distance(t, ref);
+    csv << name << "," << setting << "," << value << "," << t.steps << "," << t.newton << "," << t.seconds << ","
+        << err << "," << (t.failure.empty() ? "ok" : "failed") << "\n";
+    csv.flush();
+    std::printf("%-18s %-9s %-9g steps %7ld  newton %6ld  %8.3f s  error %.3e m %s\n", name.c_str(), setting.c_str(),
+                value, t.steps, t.newton, t.seconds, err, t.failure.c_str());
+  };
+  row("reference_check", "rtol", 1e-10, run_case(scene, scene_overrides, arkode(5, 1e-10)));
+  for (double h : {0.01, 0.005, 0.0025, 0.00125, 0.000625}) {
+    row("implicit_euler", "h", h, run_case(scene, scene_overrides, stepped("implicit_euler", h)));
+    row("newmark", "h", h, run_case(scene, scene_overrides, stepped("newmark", h)));
+  }
+  for (double h : {4e-4, 2e-4, 1e-4, 5e-5, 2.5e-5}) row("symplectic_euler", "h", h, run_case(scene, scene_overrides, stepped("symplectic_euler", h)));
+  for (int order : {2, 4, 8})
+    for (double rtol : {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8})
+      if (order > 2 || rtol >= 1e-6)  // second order needs ~3x the steps per decade beyond that
+        row("arkode_order" + std::to_string(order), "rtol", rtol, run_case(scene, scene_overrides, arkode(order, rtol)));
+  std::cout << "wrote " << out << "\n";
+  return 0;
+}
