@@ -166,7 +166,9 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
       dyn.newton.tolerance = opt.newton.tolerance;
       Points v = scene.initial_velocity;
       const auto on_step = [&](const DynamicStep& s) {
-        record(s.index, s.time, "", s.newton, s.seconds, *s.x, s.v, s.gradient);
+        NewtonResult newton = s.newton;  // report the potential energy, not the incremental potential
+        newton.energy = s.potential_energy;
+        record(s.index, s.time, "", newton, s.seconds, *s.x, s.v, s.gradient);
         StepSummary& sum = result.steps.back();
         sum.kinetic_energy = 0.5 * (mass.array() * s.v->rowwise().squaredNorm().array()).sum();
         sum.potential_energy = s.potential_energy;
