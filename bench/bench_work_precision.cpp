@@ -12,6 +12,7 @@
 // "reference_check", a bound on the reference error.
 #include <cmath>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <sstream>
 #include <string>
@@ -72,9 +73,10 @@ double max_distance(const Trajectory& a, const Trajectory& ref) {
   return e;
 }
 
+// Round-trip exact, so that steps which divide the sample interval still do once parsed back.
 std::string number(double v) {
   std::ostringstream s;
-  s << v;
+  s << std::setprecision(17) << v;
   return s.str();
 }
 
