@@ -1,0 +1,359 @@
+#include "contact/penalty_derivatives.hpp"
+
+#include <cmath>
+
+#include "contact/penalty.hpp"
+
+namespace depthfem {
+
+namespace {
+
+constexpr int kCorners = 7;      // tet corners 0..3, triangle corners 4..6
+constexpr int kMaxVertices = 8;  // capacity of a ClipPolygon
+// u = (Y_0, ..., Y_6, t_0, ..., t_7): coordinate c of corner i at 4 i + c, its depth gamma_i at
+// 4 i + 3, the parameter of the k-th crossing vertex at kT + k.
+constexpr int kT = 4 * kCorners;
+constexpr int kU = kT + kMaxVertices;
+// s = (gamma_4, gamma_5, gamma_6, t_0, t_1, ...): the intermediates nonlinear in z.
+constexpr int kMaxS = 3 + kMaxVertices;
+
+using Vec4 = Eigen::Vector4d;
+using Mat4 = Eigen::Matrix4d;
+using VecU = Eigen::Matrix<double, kU, 1>;
+using MatU = Eigen::Matrix<double, kU, kU>;
+using Jacobian = Eigen::Matrix<double, kMaxS, 21>;  // S = ds/dz, one row per intermediate
+
+Vec3 vec(const V3<double>& v) {
+  return {v.x, v.y, v.z};
+}
+
+// [v]x, the matrix of w -> v x w.
+Mat3 skew(const Vec3& v) {
+  Mat3 m;
+  m << 0, -v(2), v(1), v(2), 0, -v(0), -v(1), v(0), 0;
+  return m;
+}
+
+// Adds M to the 3x3 block (i, j) of H and M^T to the block (j, i).
+void add_symmetric_block(PairHessian& H, int i, int j, const Mat3& M) {
+  H.block<3, 3>(3 * i, 3 * j) += M;
+  H.block<3, 3>(3 * j, 3 * i) += M.transpose();
+}
+
+// Polygon vertex k with its depth: y_k = (R_k, G_k) = (1 - t) Y_A + t Y_B.
+struct Vertex {
+  VertexCorners corners;
+  double t = 0;
+  int terms = 1;                       // extended corners y_k depends on: Y_A (and Y_B)
+  std::array<double, 2> weight{1, 0};  // dy_k/dY_A = (1 - t) I, dy_k/dY_B = t I
+  int u_t = -1;                        // u index of t; -1 for a triangle corner
+  Vec4 y, dy_dt;                       // y_k and dy_k/dt = Y_B - Y_A
+  int corner(int m) const { return m == 0 ? corners.A : corners.B; }
+};
+
+// The values of every stage at z, computed as tet_polygon_penalty computes them.
+struct Stages {
+  std::array<Vec3, kCorners> x;
+  std::array<V3<double>, kCorners> X;  // x as tet_polygon_penalty's point type
+  Vec3 a;                              // gradient of the tet's depth field
+  std::array<double, kCorners> gamma;  // corner depths
+  int size = 0, crossings = 0;
+  std::array<Vertex, kMaxVertices> vertex;
+};
+
+Stages stage_values(const ClipPolygon& poly, const std::array<Vec3, 4>& P,
+                    const std::array<Vec3, 3>& Q, const std::array<double, 4>& g) {
+  Stages s;
+  std::array<V3<double>, 4> Pv;
+  for (int i = 0; i < kCorners; ++i) {
+    s.x[i] = i < 4 ? P[i] : Q[i - 4];
+    s.X[i] = make_point<double>(s.x[i], 0);
+    if (i < 4) Pv[i] = s.X[i];
+  }
+  const V3<double> a = depth_gradient(Pv, g);
+  s.a = vec(a);
+  const auto depth_at = [&](const V3<double>& r) { return a.dot(r - s.X[0]) + g[0]; };
+  for (int i = 0; i < kCorners; ++i) s.gamma[i] = i < 4 ? g[i] : depth_at(s.X[i]);
+  s.size = poly.size;
+  for (int k = 0; k < poly.size; ++k) {
+    Vertex& v = s.vertex[k];
+    v.corners = vertex_corners(poly.vertex[k]);
+    const int A = v.corners.A, B = v.corners.B;
+    V3<double> R = s.X[A];
+    if (v.corners.crossing()) {
+      const std::array<int, 3>& C = v.corners.C;
+      v.t = crossing_parameter(s.X[A], s.X[B], s.X[C[0]], s.X[C[1]], s.X[C[2]]);
+      R = segment_point(s.X[A], s.X[B], v.t);
+      v.terms = 2;
+      v.weight = {1 - v.t, v.t};
+      v.u_t = kT + s.crossings++;
+      v.dy_dt << s.x[B] - s.x[A], s.gamma[B] - s.gamma[A];
+    }
+    v.y << vec(R), depth_at(R);
+  }
+  return s;
+}
+
+// Derivatives of a fan triangle's w = kappa A q (kappa = eps / 12) with respect to its vertices
+// y_i = (R_i, G_i), i = 0, 1, 2 (indices mod 3):
+//   c = (R1 - R0) x (R2 - R0) = sum_i R_i x R_{i+1},  n = c / |c|,  A = |c| / 2;
+//   q = sum_i G_i^2 + sum_{i<j} G_i G_j:  dq/dG_i = G_i + sum_j G_j,  d2q/dG_i dG_j = 1 + delta_ij;
+//   dc = sum_i dR_i x e_i with e_i = R_{i+1} - R_{i+2}, so dA/dR_i = (e_i x n) / 2;
+//   d2A = dc^T (I - n n^T) dc / (2 |c|) + n . d2c / 2: only out-of-plane motions turn c, which
+//   gives (e_i . e_j) n n^T / (2 |c|) for the block (i, j), and the bilinear c adds -[n]x / 2 to
+//   the block (i, i + 1) and [n]x / 2 to the block (i + 1, i).
+struct FanTriangle {
+  std::array<Vec4, 3> gradient;
+  std::array<std::array<Mat4, 3>, 3> hessian;
+};
+
+void fan_triangle_derivatives(const std::array<const Vec4*, 3>& y, double kappa, bool with_hessian,
+                              FanTriangle& d) {
+  std::array<Vec3, 3> R, e, dA;
+  std::array<double, 3> G;
+  for (int i = 0; i < 3; ++i) R[i] = y[i]->head<3>(), G[i] = (*y[i])(3);
+  const Vec3 c = (R[1] - R[0]).cross(R[2] - R[0]);
+  const double length = c.norm(), area = 0.5 * length;
+  const Vec3 n = c / length;
+  const double sum = G[0] + G[1] + G[2];
+  const double q =
+      G[0] * G[0] + G[1] * G[1] + G[2] * G[2] + G[0] * G[1] + G[0] * G[2] + G[1] * G[2];
+  for (int i = 0; i < 3; ++i) {
+    e[i] = R[(i + 1) % 3] - R[(i + 2) % 3];
+    dA[i] = 0.5 * e[i].cross(n);
+    d.gradient[i] << kappa * q * dA[i], kappa * area * (G[i] + sum);
+  }
+  if (!with_hessian) return;
+  const Mat3 nn = n * n.transpose() / (2 * length), half_skew = 0.5 * skew(n);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      Mat3 d2A = e[i].dot(e[j]) * nn;
+      if (j == (i + 1) % 3) d2A -= half_skew;
+      if (i == (j + 1) % 3) d2A += half_skew;
+      Mat4& h = d.hessian[i][j];
+      h.topLeftCorner<3, 3>() = kappa * q * d2A;
+      h.topRightCorner<3, 1>() = kappa * (G[j] + sum) * dA[i];
+      h.bottomLeftCorner<1, 3>() = kappa * (G[i] + sum) * dA[j].transpose();
+      h(3, 3) = kappa * area * (i == j ? 2 : 1);
+    }
+}
+
+// F_u += (dy_k/du)^T F_y.
+void add_gradient(const Vertex& v, const Vec4& Fy, VecU& Fu) {
+  for (int m = 0; m < v.terms; ++m) Fu.segment<4>(4 * v.corner(m)) += v.weight[m] * Fy;
+  if (v.u_t >= 0) Fu(v.u_t) += v.dy_dt.dot(Fy);
+}
+
+// F_uu += (dy_k/du)^T H (dy_l/du), H = d2F/dy_k dy_l.
+void add_hessian(const Vertex& vk, const Vertex& vl, const Mat4& H, MatU& Hu) {
+  for (int m = 0; m < vk.terms; ++m)
+    for (int p = 0; p < vl.terms; ++p)
+      Hu.block<4, 4>(4 * vk.corner(m), 4 * vl.corner(p)) += (vk.weight[m] * vl.weight[p]) * H;
+  if (vk.u_t >= 0) {
+    const Eigen::RowVector4d row = vk.dy_dt.transpose() * H;
+    for (int p = 0; p < vl.terms; ++p)
+      Hu.block<1, 4>(vk.u_t, 4 * vl.corner(p)) += vl.weight[p] * row;
+  }
+  if (vl.u_t >= 0) {
+    const Vec4 col = H * vl.dy_dt;
+    for (int m = 0; m < vk.terms; ++m)
+      Hu.block<4, 1>(4 * vk.corner(m), vl.u_t) += vk.weight[m] * col;
+    if (vk.u_t >= 0) Hu(vk.u_t, vl.u_t) += vk.dy_dt.dot(col);
+  }
+}
+
+// F_uu += F_y . d2y_k/du2: y_k = Y_A + t (Y_B - Y_A) is bilinear in t and Y, with
+// d2y_k/dt dY_A = -I and d2y_k/dt dY_B = I.
+void add_curvature(const Vertex& v, const Vec4& Fy, MatU& Hu) {
+  if (v.u_t < 0) return;
+  for (int m = 0; m < 2; ++m) {
+    const double sign = m == 0 ? -1 : 1;
+    Hu.block<1, 4>(v.u_t, 4 * v.corner(m)) += sign * Fy.transpose();
+    Hu.block<4, 1>(4 * v.corner(m), v.u_t) += sign * Fy;
+  }
+}
+
+// The parameter t of a crossing vertex solves phi(z, t) = V(C0, C1, C2, A + t (B - A)) = 0 with
+// V(p0, p1, p2, p3) = det[p1 - p0, p2 - p0, p3 - p0] (= d at p3: six signed volumes). By the
+// implicit-function theorem, with D = -phi_t = d_A - d_B = m . (A - B), m = (C1 - C0) x (C2 - C0):
+//   dt/dz = phi_z / D,   d2t/dz2 = (phi_zz - dD dt^T - dt dD^T) / D,
+// where phi_z, phi_zz are the derivatives of V at p3 = R with t fixed: the p3 parts go to A with
+// weight 1 - t and to B with weight t.
+struct Crossing {
+  std::array<int, 3> C;
+  int A = 0, B = 0;
+  double t = 0;
+  std::array<Vec3, 4> p;   // C0, C1, C2, R
+  std::array<Vec3, 4> dV;  // dV/dp_i: e2 x e3, e3 x e1, e1 x e2 = m at p1..p3 (e_i = p_i - p0),
+                           // minus their sum at p0
+  Vec3 r;                  // A - B
+  double D = 0;            // m . r
+};
+
+Crossing crossing_geometry(const Vertex& v, const Stages& s) {
+  Crossing k;
+  k.C = v.corners.C;
+  k.A = v.corners.A;
+  k.B = v.corners.B;
+  k.t = v.t;
+  k.p = {s.x[k.C[0]], s.x[k.C[1]], s.x[k.C[2]], v.y.head<3>()};
+  const Vec3 e1 = k.p[1] - k.p[0], e2 = k.p[2] - k.p[0], e3 = k.p[3] - k.p[0];
+  k.dV = {Vec3::Zero(), e2.cross(e3), e3.cross(e1), e1.cross(e2)};
+  k.dV[0] = -(k.dV[1] + k.dV[2] + k.dV[3]);
+  k.r = s.x[k.A] - s.x[k.B];
+  k.D = k.dV[3].dot(k.r);
+  return k;
+}
+
+// Row r of S: dt/dz.
+void crossing_gradient(const Crossing& k, int r, Jacobian& S) {
+  for (int i = 0; i < 3; ++i) S.block<1, 3>(r, 3 * k.C[i]) = k.dV[i].transpose() / k.D;
+  S.block<1, 3>(r, 3 * k.A) = (1 - k.t) / k.D * k.dV[3].transpose();
+  S.block<1, 3>(r, 3 * k.B) = k.t / k.D * k.dV[3].transpose();
+}
+
+// dD/dz: D = m . r with m = e1 x e2 gives e2 x r at C1, r x e1 at C2, minus both at C0, m at A
+// and -m at B.
+PairGradient crossing_denominator_gradient(const Crossing& k) {
+  const Vec3 e1 = k.p[1] - k.p[0], e2 = k.p[2] - k.p[0];
+  PairGradient dD = PairGradient::Zero();
+  dD.segment<3>(3 * k.C[1]) = e2.cross(k.r);
+  dD.segment<3>(3 * k.C[2]) = k.r.cross(e1);
+  dD.segment<3>(3 * k.C[0]) = -(e2.cross(k.r) + k.r.cross(e1));
+  dD.segment<3>(3 * k.A) = k.dV[3];
+  dD.segment<3>(3 * k.B) = -k.dV[3];
+  return dD;
+}
+
+// d2V/dp_i dp_j = [p_k - p_l]x for each even permutation (i, j, k, l) of (0, 1, 2, 3) (V is
+// a sum of triple products u . (v x w), whose block (u, v) is -[w]x); the block (j, i) is its
+// transpose, and V is linear in each point, so there are no diagonal blocks.
+constexpr int kVolumeHessian[6][4] = {{0, 1, 2, 3}, {0, 2, 3, 1}, {0, 3, 1, 2},
+                                      {1, 2, 0, 3}, {1, 3, 2, 0}, {2, 3, 0, 1}};
+
+}  // namespace
+
+double tet_polygon_penalty_derivatives(const ClipPolygon& poly, const std::array<Vec3, 4>& P,
+                                       const std::array<Vec3, 3>& Q, const std::array<double, 4>& g,
+                                       double eps, double min_area2, PairGradient& gradient,
+                                       PairHessian* hessian) {
+  gradient.setZero();
+  if (hessian) hessian->setZero();
+  if (poly.size < 3) return 0;
+  const Stages st = stage_values(poly, P, Q, g);
+
+  // Fan level: W, F_y = dW/dy_k, and F_uu from the fan triangles' d2w/dy2 through y(u).
+  double W = 0;
+  std::array<Vec4, kMaxVertices> Fy;
+  for (int k = 0; k < st.size; ++k) Fy[k].setZero();
+  MatU Hu;
+  if (hessian) Hu.setZero();
+  FanTriangle d;
+  for (int k = 1; k + 1 < st.size; ++k) {
+    const std::array<const Vertex*, 3> v = {&st.vertex[0], &st.vertex[k], &st.vertex[k + 1]};
+    std::array<V3<double>, 3> R;
+    for (int i = 0; i < 3; ++i) R[i] = {v[i]->y(0), v[i]->y(1), v[i]->y(2)};
+    W += triangle_penalty(R[0], R[1], R[2], v[0]->y(3), v[1]->y(3), v[2]->y(3), eps, min_area2);
+    const V3<double> c = area_vector(R[0], R[1], R[2]);
+    if (!fan_triangle_counts(c.dot(c), min_area2)) continue;
+    fan_triangle_derivatives({&v[0]->y, &v[1]->y, &v[2]->y}, eps / 12, hessian != nullptr, d);
+    for (int i = 0; i < 3; ++i) Fy[i == 0 ? 0 : k + i - 1] += d.gradient[i];
+    if (!hessian) continue;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) add_hessian(*v[i], *v[j], d.hessian[i][j], Hu);
+  }
+  VecU Fu = VecU::Zero();
+  for (int k = 0; k < st.size; ++k) {
+    add_gradient(st.vertex[k], Fy[k], Fu);
+    if (hessian) add_curvature(st.vertex[k], Fy[k], Hu);
+  }
+
+  // The intermediates s, their Jacobian S (zero rows past the last) and F_s.
+  std::array<int, kMaxS> u_of_s{};
+  Jacobian S = Jacobian::Zero();
+  // Triangle-corner depths gamma_q = sum_j l_j(Q_q) g_j, l_j the barycentric coordinates in the
+  // tet with gradients b_j (rows of D^-1, D = [P1 - P0, P2 - P0, P3 - P0]; b_0 = -b_1 - b_2 - b_3).
+  // Moving P_j by d changes the field as moving Q_q by -l_j d: dgamma_q/dQ_q = a,
+  // dgamma_q/dP_j = -l_j(Q_q) a.
+  Mat3 Dm;
+  for (int j = 0; j < 3; ++j) Dm.col(j) = P[j + 1] - P[0];
+  const Mat3 Dinv = Dm.inverse();
+  std::array<Vec3, 4> b;
+  for (int j = 1; j < 4; ++j) b[j] = Dinv.row(j - 1).transpose();
+  b[0] = -(b[1] + b[2] + b[3]);
+  std::array<std::array<double, 4>, 3> l;
+  for (int q = 0; q < 3; ++q) {
+    l[q][0] = 1;
+    for (int j = 1; j < 4; ++j) {
+      l[q][j] = b[j].dot(Q[q] - P[0]);
+      l[q][0] -= l[q][j];
+    }
+    u_of_s[q] = 4 * (4 + q) + 3;
+    for (int j = 0; j < 4; ++j) S.block<1, 3>(q, 3 * j) = -l[q][j] * st.a.transpose();
+    S.block<1, 3>(q, 12 + 3 * q) = st.a.transpose();
+  }
+  std::array<Crossing, kMaxVertices> crossing;
+  for (int k = 0; k < st.size; ++k) {
+    const Vertex& v = st.vertex[k];
+    if (v.u_t < 0) continue;
+    const int r = 3 + v.u_t - kT;
+    u_of_s[r] = v.u_t;
+    crossing[r - 3] = crossing_geometry(v, st);
+    crossing_gradient(crossing[r - 3], r, S);
+  }
+  const int ns = 3 + st.crossings;
+  Eigen::Matrix<double, kMaxS, 1> Fs = Eigen::Matrix<double, kMaxS, 1>::Zero();
+  for (int r = 0; r < ns; ++r) Fs(r) = Fu(u_of_s[r]);
+
+  for (int i = 0; i < kCorners; ++i) gradient.segment<3>(3 * i) = Fu.segment<3>(4 * i);
+  gradient += S.transpose() * Fs;
+  if (!hessian) return W;
+
+  // d2W/dz2 = F_xx + K S + S^T K^T + sum_r F_{s_r} d2s_r/dz2 with K = F_xs + S^T F_ss / 2.
+  PairHessian& H = *hessian;
+  for (int i = 0; i < kCorners; ++i)
+    for (int j = 0; j < kCorners; ++j) H.block<3, 3>(3 * i, 3 * j) = Hu.block<3, 3>(4 * i, 4 * j);
+  Eigen::Matrix<double, kMaxS, kMaxS> Fss = Eigen::Matrix<double, kMaxS, kMaxS>::Zero();
+  Eigen::Matrix<double, 21, kMaxS> K = Eigen::Matrix<double, 21, kMaxS>::Zero();
+  for (int r = 0; r < ns; ++r) {
+    for (int r2 = 0; r2 < ns; ++r2) Fss(r, r2) = Hu(u_of_s[r], u_of_s[r2]);
+    for (int i = 0; i < kCorners; ++i) K.block<3, 1>(3 * i, r) = Hu.block<3, 1>(4 * i, u_of_s[r]);
+  }
+  K += 0.5 * S.transpose() * Fss;
+
+  // Crossings: F_t d2t/dz2 = mu (phi_zz - dD dt^T - dt dD^T) with mu = F_t / D; the last two
+  // terms enter as -mu dD in K's column of t.
+  for (int r = 3; r < ns; ++r) {
+    const Crossing& k = crossing[r - 3];
+    const double mu = Fs(r) / k.D;
+    for (const auto& [i, j, m, n] : kVolumeHessian) {
+      const Mat3 block = mu * skew(k.p[m] - k.p[n]);
+      if (j < 3) {
+        add_symmetric_block(H, k.C[i], k.C[j], block);
+      } else {
+        add_symmetric_block(H, k.C[i], k.A, (1 - k.t) * block);
+        add_symmetric_block(H, k.C[i], k.B, k.t * block);
+      }
+    }
+    K.col(r) -= mu * crossing_denominator_gradient(k);
+  }
+
+  // Triangle-corner depths: with dl_j(Q)/dP_i = -l_i(Q) b_j and da/dP_i = -b_i a^T,
+  //   d2gamma_q/dP_j dP_i = l_i(Q_q) a b_j^T + l_j(Q_q) b_i a^T,   d2gamma_q/dP_j dQ_q = -a b_j^T.
+  const Vec3& a = st.a;
+  std::array<double, 4> lambda{};  // sum_q F_{gamma_q} l_i(Q_q)
+  for (int q = 0; q < 3; ++q)
+    for (int i = 0; i < 4; ++i) lambda[i] += Fs(q) * l[q][i];
+  for (int j = 0; j < 4; ++j) {
+    for (int i = 0; i < 4; ++i)
+      H.block<3, 3>(3 * j, 3 * i) +=
+          lambda[i] * a * b[j].transpose() + lambda[j] * b[i] * a.transpose();
+    for (int q = 0; q < 3; ++q) add_symmetric_block(H, j, 4 + q, -Fs(q) * a * b[j].transpose());
+  }
+
+  const PairHessian KS = K * S;
+  H += KS + KS.transpose();
+  return W;
+}
+
+}  // namespace depthfem
