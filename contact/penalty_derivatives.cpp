@@ -1,6 +1,7 @@
 #include "contact/penalty_derivatives.hpp"
 
 #include <cmath>
+#include <cstdint>
 
 #include "contact/penalty.hpp"
 
@@ -10,18 +11,22 @@ namespace {
 
 constexpr int kCorners = 7;      // tet corners 0..3, triangle corners 4..6
 constexpr int kMaxVertices = 8;  // capacity of a ClipPolygon
-// u = (Y_0, ..., Y_6, t_0, ..., t_7): coordinate c of corner i at 4 i + c, its depth gamma_i at
-// 4 i + 3, the parameter of the k-th crossing vertex at kT + k.
-constexpr int kT = 4 * kCorners;
+// u = (x_0, ..., x_6, gamma_0, ..., gamma_6, t_0, ..., t_7): the positions (z), the corner
+// depths from kGamma on, the parameter of the k-th crossing vertex at kT + k.
+constexpr int kGamma = 21;
+constexpr int kT = kGamma + kCorners;
 constexpr int kU = kT + kMaxVertices;
-// s = (gamma_4, gamma_5, gamma_6, t_0, t_1, ...): the intermediates nonlinear in z.
-constexpr int kMaxS = 3 + kMaxVertices;
+// s = (gamma_4, gamma_5, gamma_6, t_0, ..., t_7) = u[kS, kU): the intermediates nonlinear in z.
+constexpr int kS = kGamma + 4;
+constexpr int kMaxS = kU - kS;
+// Matrices over z have 24 rows, 21 and three of padding, so that columns are whole packets.
+constexpr int kRows = 24;
 
 using Vec4 = Eigen::Vector4d;
 using Mat4 = Eigen::Matrix4d;
 using VecU = Eigen::Matrix<double, kU, 1>;
 using MatU = Eigen::Matrix<double, kU, kU>;
-using Jacobian = Eigen::Matrix<double, kMaxS, 21>;  // S = ds/dz, one row per intermediate
+using Tall = Eigen::Matrix<double, kRows, kMaxS>;  // S^T = (ds/dz)^T, one column per intermediate
 
 Vec3 vec(const V3<double>& v) {
   return {v.x, v.y, v.z};
@@ -32,12 +37,6 @@ Mat3 skew(const Vec3& v) {
   Mat3 m;
   m << 0, -v(2), v(1), v(2), 0, -v(0), -v(1), v(0), 0;
   return m;
-}
-
-// Adds M to the 3x3 block (i, j) of H and M^T to the block (j, i).
-void add_symmetric_block(PairHessian& H, int i, int j, const Mat3& M) {
-  H.block<3, 3>(3 * i, 3 * j) += M;
-  H.block<3, 3>(3 * j, 3 * i) += M.transpose();
 }
 
 // Polygon vertex k with its depth: y_k = (R_k, G_k) = (1 - t) Y_A + t Y_B.
@@ -138,26 +137,39 @@ void fan_triangle_derivatives(const std::array<const Vec4*, 3>& y, double kappa,
     }
 }
 
+// v += w at the u entries of extended corner i: x_i (3 i, 3 i + 1, 3 i + 2) and gamma_i.
+template <class V>
+void add_at_corner(V&& v, int i, const Vec4& w) {
+  v.template segment<3>(3 * i) += w.head<3>();
+  v(kGamma + i) += w(3);
+}
+
 // F_u += (dy_k/du)^T F_y.
 void add_gradient(const Vertex& v, const Vec4& Fy, VecU& Fu) {
-  for (int m = 0; m < v.terms; ++m) Fu.segment<4>(4 * v.corner(m)) += v.weight[m] * Fy;
+  for (int m = 0; m < v.terms; ++m) add_at_corner(Fu, v.corner(m), v.weight[m] * Fy);
   if (v.u_t >= 0) Fu(v.u_t) += v.dy_dt.dot(Fy);
 }
 
 // F_uu += (dy_k/du)^T H (dy_l/du), H = d2F/dy_k dy_l.
 void add_hessian(const Vertex& vk, const Vertex& vl, const Mat4& H, MatU& Hu) {
   for (int m = 0; m < vk.terms; ++m)
-    for (int p = 0; p < vl.terms; ++p)
-      Hu.block<4, 4>(4 * vk.corner(m), 4 * vl.corner(p)) += (vk.weight[m] * vl.weight[p]) * H;
+    for (int p = 0; p < vl.terms; ++p) {
+      const int i = vk.corner(m), j = vl.corner(p);
+      const Mat4 w = (vk.weight[m] * vl.weight[p]) * H;
+      Hu.block<3, 3>(3 * i, 3 * j) += w.topLeftCorner<3, 3>();
+      Hu.block<3, 1>(3 * i, kGamma + j) += w.topRightCorner<3, 1>();
+      Hu.block<1, 3>(kGamma + i, 3 * j) += w.bottomLeftCorner<1, 3>();
+      Hu(kGamma + i, kGamma + j) += w(3, 3);
+    }
   if (vk.u_t >= 0) {
-    const Eigen::RowVector4d row = vk.dy_dt.transpose() * H;
+    const Vec4 row = H.transpose() * vk.dy_dt;
     for (int p = 0; p < vl.terms; ++p)
-      Hu.block<1, 4>(vk.u_t, 4 * vl.corner(p)) += vl.weight[p] * row;
+      add_at_corner(Hu.row(vk.u_t), vl.corner(p), vl.weight[p] * row);
   }
   if (vl.u_t >= 0) {
     const Vec4 col = H * vl.dy_dt;
     for (int m = 0; m < vk.terms; ++m)
-      Hu.block<4, 1>(4 * vk.corner(m), vl.u_t) += vk.weight[m] * col;
+      add_at_corner(Hu.col(vl.u_t), vk.corner(m), vk.weight[m] * col);
     if (vk.u_t >= 0) Hu(vk.u_t, vl.u_t) += vk.dy_dt.dot(col);
   }
 }
@@ -167,9 +179,9 @@ void add_hessian(const Vertex& vk, const Vertex& vl, const Mat4& H, MatU& Hu) {
 void add_curvature(const Vertex& v, const Vec4& Fy, MatU& Hu) {
   if (v.u_t < 0) return;
   for (int m = 0; m < 2; ++m) {
-    const double sign = m == 0 ? -1 : 1;
-    Hu.block<1, 4>(v.u_t, 4 * v.corner(m)) += sign * Fy.transpose();
-    Hu.block<4, 1>(4 * v.corner(m), v.u_t) += sign * Fy;
+    const Vec4 w = m == 0 ? Vec4(-Fy) : Fy;
+    add_at_corner(Hu.row(v.u_t), v.corner(m), w);
+    add_at_corner(Hu.col(v.u_t), v.corner(m), w);
   }
 }
 
@@ -205,24 +217,36 @@ Crossing crossing_geometry(const Vertex& v, const Stages& s) {
   return k;
 }
 
-// Row r of S: dt/dz.
-void crossing_gradient(const Crossing& k, int r, Jacobian& S) {
-  for (int i = 0; i < 3; ++i) S.block<1, 3>(r, 3 * k.C[i]) = k.dV[i].transpose() / k.D;
-  S.block<1, 3>(r, 3 * k.A) = (1 - k.t) / k.D * k.dV[3].transpose();
-  S.block<1, 3>(r, 3 * k.B) = k.t / k.D * k.dV[3].transpose();
+// Column r of S^T: dt/dz.
+void crossing_gradient(const Crossing& k, int r, Tall& St) {
+  for (int i = 0; i < 3; ++i) St.block<3, 1>(3 * k.C[i], r) = k.dV[i] / k.D;
+  St.block<3, 1>(3 * k.A, r) = (1 - k.t) / k.D * k.dV[3];
+  St.block<3, 1>(3 * k.B, r) = k.t / k.D * k.dV[3];
 }
 
-// dD/dz: D = m . r with m = e1 x e2 gives e2 x r at C1, r x e1 at C2, minus both at C0, m at A
-// and -m at B.
-PairGradient crossing_denominator_gradient(const Crossing& k) {
+// v += w dD/dz: D = m . r with m = e1 x e2 gives e2 x r at C1, r x e1 at C2, minus both at C0,
+// m at A and -m at B.
+template <class V>
+void add_denominator_gradient(const Crossing& k, double w, V&& v) {
   const Vec3 e1 = k.p[1] - k.p[0], e2 = k.p[2] - k.p[0];
-  PairGradient dD = PairGradient::Zero();
-  dD.segment<3>(3 * k.C[1]) = e2.cross(k.r);
-  dD.segment<3>(3 * k.C[2]) = k.r.cross(e1);
-  dD.segment<3>(3 * k.C[0]) = -(e2.cross(k.r) + k.r.cross(e1));
-  dD.segment<3>(3 * k.A) = k.dV[3];
-  dD.segment<3>(3 * k.B) = -k.dV[3];
-  return dD;
+  const Vec3 at_C1 = w * e2.cross(k.r), at_C2 = w * k.r.cross(e1);
+  v.template segment<3>(3 * k.C[0]) -= at_C1 + at_C2;
+  v.template segment<3>(3 * k.C[1]) += at_C1;
+  v.template segment<3>(3 * k.C[2]) += at_C2;
+  v.template segment<3>(3 * k.A) += w * k.dV[3];
+  v.template segment<3>(3 * k.B) -= w * k.dV[3];
+}
+
+// H += [v]x at the block (i, j) and its transpose -[v]x at the block (j, i).
+template <class M>
+void add_skew_pair(M& H, int i, int j, const Vec3& v) {
+  for (const auto& [a, b, c] :
+       {std::array<int, 3>{0, 1, 2}, {1, 2, 0}, {2, 0, 1}}) {  // [v]x(a, b) = -v_c
+    H(3 * i + a, 3 * j + b) -= v(c);
+    H(3 * i + b, 3 * j + a) += v(c);
+    H(3 * j + b, 3 * i + a) -= v(c);
+    H(3 * j + a, 3 * i + b) += v(c);
+  }
 }
 
 // d2V/dp_i dp_j = [p_k - p_l]x for each even permutation (i, j, k, l) of (0, 1, 2, 3) (V is
@@ -237,9 +261,11 @@ double tet_polygon_penalty_derivatives(const ClipPolygon& poly, const std::array
                                        const std::array<Vec3, 3>& Q, const std::array<double, 4>& g,
                                        double eps, double min_area2, PairGradient& gradient,
                                        PairHessian* hessian) {
-  gradient.setZero();
-  if (hessian) hessian->setZero();
-  if (poly.size < 3) return 0;
+  if (poly.size < 3) {
+    gradient.setZero();
+    if (hessian) hessian->setZero();
+    return 0;
+  }
   const Stages st = stage_values(poly, P, Q, g);
 
   // Fan level: W, F_y = dW/dy_k, and F_uu from the fan triangles' d2w/dy2 through y(u).
@@ -268,9 +294,8 @@ double tet_polygon_penalty_derivatives(const ClipPolygon& poly, const std::array
     if (hessian) add_curvature(st.vertex[k], Fy[k], Hu);
   }
 
-  // The intermediates s, their Jacobian S (zero rows past the last) and F_s.
-  std::array<int, kMaxS> u_of_s{};
-  Jacobian S = Jacobian::Zero();
+  // The intermediates s: S^T (zero columns past the last) and F_s.
+  Tall St = Tall::Zero();
   // Triangle-corner depths gamma_q = sum_j l_j(Q_q) g_j, l_j the barycentric coordinates in the
   // tet with gradients b_j (rows of D^-1, D = [P1 - P0, P2 - P0, P3 - P0]; b_0 = -b_1 - b_2 - b_3).
   // Moving P_j by d changes the field as moving Q_q by -l_j d: dgamma_q/dQ_q = a,
@@ -288,55 +313,59 @@ double tet_polygon_penalty_derivatives(const ClipPolygon& poly, const std::array
       l[q][j] = b[j].dot(Q[q] - P[0]);
       l[q][0] -= l[q][j];
     }
-    u_of_s[q] = 4 * (4 + q) + 3;
-    for (int j = 0; j < 4; ++j) S.block<1, 3>(q, 3 * j) = -l[q][j] * st.a.transpose();
-    S.block<1, 3>(q, 12 + 3 * q) = st.a.transpose();
+    for (int j = 0; j < 4; ++j) St.block<3, 1>(3 * j, q) = -l[q][j] * st.a;
+    St.block<3, 1>(12 + 3 * q, q) = st.a;
   }
   std::array<Crossing, kMaxVertices> crossing;
   for (int k = 0; k < st.size; ++k) {
     const Vertex& v = st.vertex[k];
     if (v.u_t < 0) continue;
-    const int r = 3 + v.u_t - kT;
-    u_of_s[r] = v.u_t;
+    const int r = v.u_t - kS;
     crossing[r - 3] = crossing_geometry(v, st);
-    crossing_gradient(crossing[r - 3], r, S);
+    crossing_gradient(crossing[r - 3], r, St);
   }
   const int ns = 3 + st.crossings;
-  Eigen::Matrix<double, kMaxS, 1> Fs = Eigen::Matrix<double, kMaxS, 1>::Zero();
-  for (int r = 0; r < ns; ++r) Fs(r) = Fu(u_of_s[r]);
+  const Eigen::Matrix<double, kMaxS, 1> Fs = Fu.tail<kMaxS>();
 
-  for (int i = 0; i < kCorners; ++i) gradient.segment<3>(3 * i) = Fu.segment<3>(4 * i);
-  gradient += S.transpose() * Fs;
+  gradient = Fu.head<21>() + St.lazyProduct(Fs).head<21>();
   if (!hessian) return W;
 
-  // d2W/dz2 = F_xx + K S + S^T K^T + sum_r F_{s_r} d2s_r/dz2 with K = F_xs + S^T F_ss / 2.
-  PairHessian& H = *hessian;
-  for (int i = 0; i < kCorners; ++i)
-    for (int j = 0; j < kCorners; ++j) H.block<3, 3>(3 * i, 3 * j) = Hu.block<3, 3>(4 * i, 4 * j);
-  Eigen::Matrix<double, kMaxS, kMaxS> Fss = Eigen::Matrix<double, kMaxS, kMaxS>::Zero();
-  Eigen::Matrix<double, 21, kMaxS> K = Eigen::Matrix<double, 21, kMaxS>::Zero();
-  for (int r = 0; r < ns; ++r) {
-    for (int r2 = 0; r2 < ns; ++r2) Fss(r, r2) = Hu(u_of_s[r], u_of_s[r2]);
-    for (int i = 0; i < kCorners; ++i) K.block<3, 1>(3 * i, r) = Hu.block<3, 1>(4 * i, u_of_s[r]);
-  }
-  K += 0.5 * S.transpose() * Fss;
+  // d2W/dz2 = F_xx + K S + S^T K^T + sum_r F_{s_r} d2s_r/dz2 with K = F_xs + S^T F_ss / 2,
+  // accumulated in place of F_xx and F_xs in F_uu (rows 21..23 are padding).
+  auto Hxx = Hu.topLeftCorner<kRows, 21>();
+  auto K = Hu.block<kRows, kMaxS>(0, kS);
+  const auto Fss = Hu.bottomRightCorner<kMaxS, kMaxS>();
+  for (int r = 0; r < ns; ++r)
+    for (int r2 = 0; r2 < ns; ++r2) K.col(r) += (0.5 * Fss(r2, r)) * St.col(r2);
 
   // Crossings: F_t d2t/dz2 = mu (phi_zz - dD dt^T - dt dD^T) with mu = F_t / D; the last two
-  // terms enter as -mu dD in K's column of t.
+  // terms enter as -mu dD in K's column of t. The skew blocks of phi_zz are summed per pair of
+  // corners (i < j) first: [v]x at (i, j) is [-v]x at (j, i).
+  std::array<Vec3, kCorners * kCorners> skew_sum;
+  std::uint64_t touched = 0;  // bit i * kCorners + j: pair (i, j) has a sum
+  const auto add_skew = [&](int i, int j, const Vec3& v) {
+    const int pair = i < j ? i * kCorners + j : j * kCorners + i;
+    if (!(touched >> pair & 1)) skew_sum[pair].setZero();
+    touched |= std::uint64_t{1} << pair;
+    skew_sum[pair] += i < j ? v : Vec3(-v);
+  };
   for (int r = 3; r < ns; ++r) {
     const Crossing& k = crossing[r - 3];
     const double mu = Fs(r) / k.D;
     for (const auto& [i, j, m, n] : kVolumeHessian) {
-      const Mat3 block = mu * skew(k.p[m] - k.p[n]);
+      const Vec3 v = mu * (k.p[m] - k.p[n]);
       if (j < 3) {
-        add_symmetric_block(H, k.C[i], k.C[j], block);
+        add_skew(k.C[i], k.C[j], v);
       } else {
-        add_symmetric_block(H, k.C[i], k.A, (1 - k.t) * block);
-        add_symmetric_block(H, k.C[i], k.B, k.t * block);
+        add_skew(k.C[i], k.A, (1 - k.t) * v);
+        add_skew(k.C[i], k.B, k.t * v);
       }
     }
-    K.col(r) -= mu * crossing_denominator_gradient(k);
+    add_denominator_gradient(k, -mu, K.col(r));
   }
+  for (int i = 0; i < kCorners; ++i)
+    for (int j = i + 1; j < kCorners; ++j)
+      if (touched >> (i * kCorners + j) & 1) add_skew_pair(Hxx, i, j, skew_sum[i * kCorners + j]);
 
   // Triangle-corner depths: with dl_j(Q)/dP_i = -l_i(Q) b_j and da/dP_i = -b_i a^T,
   //   d2gamma_q/dP_j dP_i = l_i(Q_q) a b_j^T + l_j(Q_q) b_i a^T,   d2gamma_q/dP_j dQ_q = -a b_j^T.
@@ -346,13 +375,21 @@ double tet_polygon_penalty_derivatives(const ClipPolygon& poly, const std::array
     for (int i = 0; i < 4; ++i) lambda[i] += Fs(q) * l[q][i];
   for (int j = 0; j < 4; ++j) {
     for (int i = 0; i < 4; ++i)
-      H.block<3, 3>(3 * j, 3 * i) +=
+      Hxx.block<3, 3>(3 * j, 3 * i) +=
           lambda[i] * a * b[j].transpose() + lambda[j] * b[i] * a.transpose();
-    for (int q = 0; q < 3; ++q) add_symmetric_block(H, j, 4 + q, -Fs(q) * a * b[j].transpose());
+    for (int q = 0; q < 3; ++q) {
+      const Mat3 block = Fs(q) * a * b[j].transpose();
+      Hxx.block<3, 3>(3 * j, 12 + 3 * q) -= block;
+      Hxx.block<3, 3>(12 + 3 * q, 3 * j) -= block.transpose();
+    }
   }
 
-  const PairHessian KS = K * S;
-  H += KS + KS.transpose();
+  // + K S + S^T K^T, a column at a time: column c gains sum_r K(:, r) S(r, c) + S^T(:, r) K(c, r).
+  for (int c = 0; c < 21; ++c) {
+    Eigen::Matrix<double, kRows, 1> column = Hxx.col(c);
+    for (int r = 0; r < ns; ++r) column += St(c, r) * K.col(r) + K(c, r) * St.col(r);
+    hessian->col(c) = column.head<21>();
+  }
   return W;
 }
 
