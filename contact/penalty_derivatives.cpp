@@ -255,92 +255,91 @@ void add_skew_pair(M& H, int i, int j, const Vec3& v) {
 constexpr int kVolumeHessian[6][4] = {{0, 1, 2, 3}, {0, 2, 3, 1}, {0, 3, 1, 2},
                                       {1, 2, 0, 3}, {1, 3, 2, 0}, {2, 3, 0, 1}};
 
-}  // namespace
-
-double tet_polygon_penalty_derivatives(const ClipPolygon& poly, const std::array<Vec3, 4>& P,
-                                       const std::array<Vec3, 3>& Q, const std::array<double, 4>& g,
-                                       double eps, double min_area2, PairGradient& gradient,
-                                       PairHessian* hessian) {
-  if (poly.size < 3) {
-    gradient.setZero();
-    if (hessian) hessian->setZero();
-    return 0;
-  }
-  const Stages st = stage_values(poly, P, Q, g);
-
-  // Fan level: W, F_y = dW/dy_k, and F_uu from the fan triangles' d2w/dy2 through y(u).
+// The fan level: W (returned), F_u and, where Hu is not null, F_uu, from each fan triangle's
+// derivatives with respect to its y through y(u).
+double fan_level(const Stages& st, double eps, double min_area2, VecU& Fu, MatU* Hu) {
   double W = 0;
-  std::array<Vec4, kMaxVertices> Fy;
+  std::array<Vec4, kMaxVertices> Fy;  // dW/dy_k
   for (int k = 0; k < st.size; ++k) Fy[k].setZero();
-  MatU Hu;
-  if (hessian) Hu.setZero();
+  if (Hu) Hu->setZero();
   FanTriangle d;
   for (int k = 1; k + 1 < st.size; ++k) {
-    const std::array<const Vertex*, 3> v = {&st.vertex[0], &st.vertex[k], &st.vertex[k + 1]};
+    const std::array<int, 3> fan = {0, k, k + 1};
     std::array<V3<double>, 3> R;
-    for (int i = 0; i < 3; ++i) R[i] = {v[i]->y(0), v[i]->y(1), v[i]->y(2)};
-    W += triangle_penalty(R[0], R[1], R[2], v[0]->y(3), v[1]->y(3), v[2]->y(3), eps, min_area2);
+    std::array<double, 3> G;
+    for (int i = 0; i < 3; ++i) {
+      const Vec4& y = st.vertex[fan[i]].y;
+      R[i] = {y(0), y(1), y(2)};
+      G[i] = y(3);
+    }
+    W += triangle_penalty(R[0], R[1], R[2], G[0], G[1], G[2], eps, min_area2);
     const V3<double> c = area_vector(R[0], R[1], R[2]);
     if (!fan_triangle_counts(c.dot(c), min_area2)) continue;
-    fan_triangle_derivatives({&v[0]->y, &v[1]->y, &v[2]->y}, eps / 12, hessian != nullptr, d);
-    for (int i = 0; i < 3; ++i) Fy[i == 0 ? 0 : k + i - 1] += d.gradient[i];
-    if (!hessian) continue;
+    fan_triangle_derivatives({&st.vertex[fan[0]].y, &st.vertex[fan[1]].y, &st.vertex[fan[2]].y},
+                             eps / 12, Hu != nullptr, d);
+    for (int i = 0; i < 3; ++i) Fy[fan[i]] += d.gradient[i];
+    if (!Hu) continue;
     for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) add_hessian(*v[i], *v[j], d.hessian[i][j], Hu);
+      for (int j = 0; j < 3; ++j)
+        add_hessian(st.vertex[fan[i]], st.vertex[fan[j]], d.hessian[i][j], *Hu);
   }
-  VecU Fu = VecU::Zero();
+  Fu.setZero();
   for (int k = 0; k < st.size; ++k) {
     add_gradient(st.vertex[k], Fy[k], Fu);
-    if (hessian) add_curvature(st.vertex[k], Fy[k], Hu);
+    if (Hu) add_curvature(st.vertex[k], Fy[k], *Hu);
   }
+  return W;
+}
 
-  // The intermediates s: S^T (zero columns past the last) and F_s.
-  Tall St = Tall::Zero();
+// The intermediates s at z with S^T, and what their curvature terms need.
+struct Intermediates {
+  int count = 0;                           // 3 + crossings
+  Tall St;                                 // zero columns past the last
+  std::array<Vec3, 4> b;                   // gradients of the barycentric coordinates in the tet
+  std::array<std::array<double, 4>, 3> l;  // l_j(Q_q)
+  std::array<Crossing, kMaxVertices> crossing;
+};
+
+Intermediates intermediates(const Stages& st) {
+  Intermediates s;
+  s.St.setZero();
   // Triangle-corner depths gamma_q = sum_j l_j(Q_q) g_j, l_j the barycentric coordinates in the
   // tet with gradients b_j (rows of D^-1, D = [P1 - P0, P2 - P0, P3 - P0]; b_0 = -b_1 - b_2 - b_3).
   // Moving P_j by d changes the field as moving Q_q by -l_j d: dgamma_q/dQ_q = a,
   // dgamma_q/dP_j = -l_j(Q_q) a.
-  Mat3 Dm;
-  for (int j = 0; j < 3; ++j) Dm.col(j) = P[j + 1] - P[0];
-  const Mat3 Dinv = Dm.inverse();
-  std::array<Vec3, 4> b;
-  for (int j = 1; j < 4; ++j) b[j] = Dinv.row(j - 1).transpose();
-  b[0] = -(b[1] + b[2] + b[3]);
-  std::array<std::array<double, 4>, 3> l;
+  Mat3 D;
+  for (int j = 0; j < 3; ++j) D.col(j) = st.x[j + 1] - st.x[0];
+  const Mat3 D_inv = D.inverse();
+  for (int j = 1; j < 4; ++j) s.b[j] = D_inv.row(j - 1).transpose();
+  s.b[0] = -(s.b[1] + s.b[2] + s.b[3]);
   for (int q = 0; q < 3; ++q) {
-    l[q][0] = 1;
+    s.l[q][0] = 1;
     for (int j = 1; j < 4; ++j) {
-      l[q][j] = b[j].dot(Q[q] - P[0]);
-      l[q][0] -= l[q][j];
+      s.l[q][j] = s.b[j].dot(st.x[4 + q] - st.x[0]);
+      s.l[q][0] -= s.l[q][j];
     }
-    for (int j = 0; j < 4; ++j) St.block<3, 1>(3 * j, q) = -l[q][j] * st.a;
-    St.block<3, 1>(12 + 3 * q, q) = st.a;
+    for (int j = 0; j < 4; ++j) s.St.block<3, 1>(3 * j, q) = -s.l[q][j] * st.a;
+    s.St.block<3, 1>(12 + 3 * q, q) = st.a;
   }
-  std::array<Crossing, kMaxVertices> crossing;
+  s.count = 3 + st.crossings;
   for (int k = 0; k < st.size; ++k) {
     const Vertex& v = st.vertex[k];
     if (v.u_t < 0) continue;
     const int r = v.u_t - kS;
-    crossing[r - 3] = crossing_geometry(v, st);
-    crossing_gradient(crossing[r - 3], r, St);
+    s.crossing[r - 3] = crossing_geometry(v, st);
+    crossing_gradient(s.crossing[r - 3], r, s.St);
   }
-  const int ns = 3 + st.crossings;
-  const Eigen::Matrix<double, kMaxS, 1> Fs = Fu.tail<kMaxS>();
+  return s;
+}
 
-  gradient = Fu.head<21>() + St.lazyProduct(Fs).head<21>();
-  if (!hessian) return W;
-
-  // d2W/dz2 = F_xx + K S + S^T K^T + sum_r F_{s_r} d2s_r/dz2 with K = F_xs + S^T F_ss / 2,
-  // accumulated in place of F_xx and F_xs in F_uu (rows 21..23 are padding).
-  auto Hxx = Hu.topLeftCorner<kRows, 21>();
-  auto K = Hu.block<kRows, kMaxS>(0, kS);
-  const auto Fss = Hu.bottomRightCorner<kMaxS, kMaxS>();
-  for (int r = 0; r < ns; ++r)
-    for (int r2 = 0; r2 < ns; ++r2) K.col(r) += (0.5 * Fss(r2, r)) * St.col(r2);
-
-  // Crossings: F_t d2t/dz2 = mu (phi_zz - dD dt^T - dt dD^T) with mu = F_t / D; the last two
-  // terms enter as -mu dD in K's column of t. The skew blocks of phi_zz are summed per pair of
-  // corners (i < j) first: [v]x at (i, j) is [-v]x at (j, i).
+// Hxx += sum_r F_{s_r} d2s_r/dz2, except for the crossings' terms -mu (dD dt^T + dt dD^T),
+// which enter as K(:, t) -= mu dD.
+template <class Block>
+void add_intermediate_curvature(const Stages& st, const Intermediates& s,
+                                const Eigen::Matrix<double, kMaxS, 1>& Fs, Block& Hxx,
+                                Eigen::Block<MatU, kRows, kMaxS>& K) {
+  // Crossings: F_t d2t/dz2 = mu (phi_zz - dD dt^T - dt dD^T) with mu = F_t / D. The skew blocks
+  // of phi_zz are summed per pair of corners (i < j) first: [v]x at (i, j) is [-v]x at (j, i).
   std::array<Vec3, kCorners * kCorners> skew_sum;
   std::uint64_t touched = 0;  // bit i * kCorners + j: pair (i, j) has a sum
   const auto add_skew = [&](int i, int j, const Vec3& v) {
@@ -349,8 +348,8 @@ double tet_polygon_penalty_derivatives(const ClipPolygon& poly, const std::array
     touched |= std::uint64_t{1} << pair;
     skew_sum[pair] += i < j ? v : Vec3(-v);
   };
-  for (int r = 3; r < ns; ++r) {
-    const Crossing& k = crossing[r - 3];
+  for (int r = 3; r < s.count; ++r) {
+    const Crossing& k = s.crossing[r - 3];
     const double mu = Fs(r) / k.D;
     for (const auto& [i, j, m, n] : kVolumeHessian) {
       const Vec3 v = mu * (k.p[m] - k.p[n]);
@@ -372,22 +371,56 @@ double tet_polygon_penalty_derivatives(const ClipPolygon& poly, const std::array
   const Vec3& a = st.a;
   std::array<double, 4> lambda{};  // sum_q F_{gamma_q} l_i(Q_q)
   for (int q = 0; q < 3; ++q)
-    for (int i = 0; i < 4; ++i) lambda[i] += Fs(q) * l[q][i];
+    for (int i = 0; i < 4; ++i) lambda[i] += Fs(q) * s.l[q][i];
   for (int j = 0; j < 4; ++j) {
     for (int i = 0; i < 4; ++i)
-      Hxx.block<3, 3>(3 * j, 3 * i) +=
-          lambda[i] * a * b[j].transpose() + lambda[j] * b[i] * a.transpose();
+      Hxx.template block<3, 3>(3 * j, 3 * i) +=
+          lambda[i] * a * s.b[j].transpose() + lambda[j] * s.b[i] * a.transpose();
     for (int q = 0; q < 3; ++q) {
-      const Mat3 block = Fs(q) * a * b[j].transpose();
-      Hxx.block<3, 3>(3 * j, 12 + 3 * q) -= block;
-      Hxx.block<3, 3>(12 + 3 * q, 3 * j) -= block.transpose();
+      const Mat3 block = Fs(q) * a * s.b[j].transpose();
+      Hxx.template block<3, 3>(3 * j, 12 + 3 * q) -= block;
+      Hxx.template block<3, 3>(12 + 3 * q, 3 * j) -= block.transpose();
     }
   }
+}
 
+}  // namespace
+
+double tet_polygon_penalty_derivatives(const ClipPolygon& poly, const std::array<Vec3, 4>& P,
+                                       const std::array<Vec3, 3>& Q, const std::array<double, 4>& g,
+                                       double eps, double min_area2, PairGradient& gradient,
+                                       PairHessian* hessian) {
+  if (poly.size < 3) {
+    gradient.setZero();
+    if (hessian) hessian->setZero();
+    return 0;
+  }
+  const Stages st = stage_values(poly, P, Q, g);
+
+  // Level two: F(u) and its derivatives.
+  MatU Hu;
+  VecU Fu;
+  const double W = fan_level(st, eps, min_area2, Fu, hessian ? &Hu : nullptr);
+
+  // The intermediates s: dW/dz = F_x + S^T F_s.
+  const Intermediates s = intermediates(st);
+  const Eigen::Matrix<double, kMaxS, 1> Fs = Fu.tail<kMaxS>();
+  gradient = Fu.head<21>() + s.St.lazyProduct(Fs).head<21>();
+  if (!hessian) return W;
+
+  // d2W/dz2 = F_xx + K S + S^T K^T + sum_r F_{s_r} d2s_r/dz2 with K = F_xs + S^T F_ss / 2,
+  // accumulated in place of F_xx and F_xs in F_uu. Their rows 21..23 (depths of tet corners,
+  // constants) only pad the columns to whole packets and are dropped.
+  auto Hxx = Hu.topLeftCorner<kRows, 21>();
+  auto K = Hu.block<kRows, kMaxS>(0, kS);
+  const auto Fss = Hu.bottomRightCorner<kMaxS, kMaxS>();
+  for (int r = 0; r < s.count; ++r)
+    for (int r2 = 0; r2 < s.count; ++r2) K.col(r) += (0.5 * Fss(r2, r)) * s.St.col(r2);
+  add_intermediate_curvature(st, s, Fs, Hxx, K);
   // + K S + S^T K^T, a column at a time: column c gains sum_r K(:, r) S(r, c) + S^T(:, r) K(c, r).
   for (int c = 0; c < 21; ++c) {
     Eigen::Matrix<double, kRows, 1> column = Hxx.col(c);
-    for (int r = 0; r < ns; ++r) column += St(c, r) * K.col(r) + K(c, r) * St.col(r);
+    for (int r = 0; r < s.count; ++r) column += s.St(c, r) * K.col(r) + K(c, r) * s.St.col(r);
     hessian->col(c) = column.head<21>();
   }
   return W;

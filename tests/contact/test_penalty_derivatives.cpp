@@ -142,7 +142,7 @@ void expect_staged_equals_dual(const ClipPolygon& poly, const std::array<Vec3, 4
   EXPECT_LE((grad_only - grad).cwiseAbs().maxCoeff(), 1e-15 * gmax);
 }
 
-TEST(StagedPenaltyDerivatives, EqualAutomaticDifferentiationInEveryClipCase) {
+TEST(StagedContactDerivatives, EqualAutomaticDifferentiationInEveryClipCase) {
   std::mt19937 rng(41);
   std::uniform_real_distribution<double> u(-0.4, 1.2);
   const std::array<double, 4> g = {0.02, 0.35, 0.1, 0.6};
@@ -167,7 +167,7 @@ TEST(StagedPenaltyDerivatives, EqualAutomaticDifferentiationInEveryClipCase) {
 // triangle edge through a tet edge, make the clip repeat a point, so that some fan triangles have
 // zero area up to rounding. With the module's threshold (area 1e-12 of an element face) they do
 // not count, for the energy and the derivatives alike.
-TEST(StagedPenaltyDerivatives, EqualAutomaticDifferentiationWithDegenerateFanTriangles) {
+TEST(StagedContactDerivatives, EqualAutomaticDifferentiationWithDegenerateFanTriangles) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> unit(0, 1), u(-0.4, 1.2);
   const std::array<double, 4> g = {0.3, 0.05, 0.2, 0.45};
