@@ -150,6 +150,10 @@ void add_gradient(const Vertex& v, const Vec4& Fy, VecU& Fu) {
   if (v.u_t >= 0) Fu(v.u_t) += v.dy_dt.dot(Fy);
 }
 
+// F_uu is symmetric, and what is read of it are its rows of positions (F_xx, F_xs) and its block
+// of intermediates (F_ss): the rows of depths and crossing parameters are filled in the columns
+// of depths and parameters only.
+
 // F_uu += (dy_k/du)^T H (dy_l/du), H = d2F/dy_k dy_l.
 void add_hessian(const Vertex& vk, const Vertex& vl, const Mat4& H, MatU& Hu) {
   for (int m = 0; m < vk.terms; ++m)
@@ -158,13 +162,11 @@ void add_hessian(const Vertex& vk, const Vertex& vl, const Mat4& H, MatU& Hu) {
       const Mat4 w = (vk.weight[m] * vl.weight[p]) * H;
       Hu.block<3, 3>(3 * i, 3 * j) += w.topLeftCorner<3, 3>();
       Hu.block<3, 1>(3 * i, kGamma + j) += w.topRightCorner<3, 1>();
-      Hu.block<1, 3>(kGamma + i, 3 * j) += w.bottomLeftCorner<1, 3>();
       Hu(kGamma + i, kGamma + j) += w(3, 3);
     }
   if (vk.u_t >= 0) {
-    const Vec4 row = H.transpose() * vk.dy_dt;
-    for (int p = 0; p < vl.terms; ++p)
-      add_at_corner(Hu.row(vk.u_t), vl.corner(p), vl.weight[p] * row);
+    const double row = H.col(3).dot(vk.dy_dt);  // (dy_k/dt)^T H at the depth of y_l
+    for (int p = 0; p < vl.terms; ++p) Hu(vk.u_t, kGamma + vl.corner(p)) += vl.weight[p] * row;
   }
   if (vl.u_t >= 0) {
     const Vec4 col = H * vl.dy_dt;
@@ -179,9 +181,9 @@ void add_hessian(const Vertex& vk, const Vertex& vl, const Mat4& H, MatU& Hu) {
 void add_curvature(const Vertex& v, const Vec4& Fy, MatU& Hu) {
   if (v.u_t < 0) return;
   for (int m = 0; m < 2; ++m) {
-    const Vec4 w = m == 0 ? Vec4(-Fy) : Fy;
-    add_at_corner(Hu.row(v.u_t), v.corner(m), w);
-    add_at_corner(Hu.col(v.u_t), v.corner(m), w);
+    const double sign = m == 0 ? -1 : 1;
+    add_at_corner(Hu.col(v.u_t), v.corner(m), sign * Fy);
+    Hu(v.u_t, kGamma + v.corner(m)) += sign * Fy(3);
   }
 }
 

@@ -83,7 +83,7 @@ TEST(PenaltyDerivatives, MatchFiniteDifferencesInEveryClipCase) {
   for (int k = 0; k < 3; ++k) EXPECT_GT(kinds[k], 5) << "vertex kind " << k << " not covered";
 }
 
-// A tet near the reference tet, and node depths as material depth gives them (>= 0).
+// The reference tet with each corner moved by up to 0.15 in each coordinate.
 std::array<Vec3, 4> jittered_tet(std::mt19937& rng) {
   std::uniform_real_distribution<double> jitter(-0.15, 0.15);
   std::array<Vec3, 4> P = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
