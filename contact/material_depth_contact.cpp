@@ -23,8 +23,12 @@ std::array<Vec3, 3> tri_corners(const Points& x, const TriIndices& tris, Index f
 }  // namespace
 
 MaterialDepthContact::MaterialDepthContact(const Mesh& mesh, VectorX depth, ContactOptions options)
-    : tets_(mesh.tets), tris_(mesh.tris), tet_body_(mesh.tet_body), tri_body_(mesh.tri_body),
-      depth_(std::move(depth)), options_(options) {
+    : tets_(mesh.tets),
+      tris_(mesh.tris),
+      tet_body_(mesh.tet_body),
+      tri_body_(mesh.tri_body),
+      depth_(std::move(depth)),
+      options_(options) {
   // Sub-triangles with area below 1e-12 of a typical element face count as degenerate.
   const double h = mean_edge_length(mesh.X, mesh.tets);
   min_area2_ = std::pow(1e-12 * h * h, 2);
@@ -36,7 +40,9 @@ std::array<Index, 7> MaterialDepthContact::pair_nodes(const ContactPair& p) cons
           tris_(p.tri, 0), tris_(p.tri, 1), tris_(p.tri, 2)};
 }
 
-void MaterialDepthContact::begin_step(const Points& x, double) { tree_ = AabbTree(tet_boxes(x, tets_)); }
+void MaterialDepthContact::begin_step(const Points& x, double) {
+  tree_ = AabbTree(tet_boxes(x, tets_));
+}
 
 void MaterialDepthContact::prepare(const Points& x) {
   tree_.refit(tet_boxes(x, tets_));
@@ -71,7 +77,8 @@ void MaterialDepthContact::prepare(const Points& x) {
   stats_.active = static_cast<Index>(pairs_.size());
   for (const ContactPair& p : pairs_) {
     for (int k = 1; k + 1 < p.polygon.size; ++k)
-      stats_.area += 0.5 * (p.polygon.x[k] - p.polygon.x[0]).cross(p.polygon.x[k + 1] - p.polygon.x[0]).norm();
+      stats_.area +=
+          0.5 * (p.polygon.x[k] - p.polygon.x[0]).cross(p.polygon.x[k + 1] - p.polygon.x[0]).norm();
   }
   // A pair whose nodes are not coupled in the bound pattern needs a new pattern.
   pattern_changed_ = false;
@@ -100,30 +107,28 @@ void MaterialDepthContact::bind(const BlockSparseMatrix& hessian) {
   pattern_changed_ = false;
 }
 
+std::array<double, 4> MaterialDepthContact::pair_depths(const ContactPair& p) const {
+  return {depth_(tets_(p.tet, 0)), depth_(tets_(p.tet, 1)), depth_(tets_(p.tet, 2)),
+          depth_(tets_(p.tet, 3))};
+}
+
 double MaterialDepthContact::pair_energy(const Points& x, const ContactPair& p) const {
   std::array<V3<double>, 4> P;
   std::array<V3<double>, 3> Q;
   for (int a = 0; a < 4; ++a) P[a] = make_point<double>(x.row(tets_(p.tet, a)), 0);
   for (int b = 0; b < 3; ++b) Q[b] = make_point<double>(x.row(tris_(p.tri, b)), 0);
-  const std::array<double, 4> g = {depth_(tets_(p.tet, 0)), depth_(tets_(p.tet, 1)), depth_(tets_(p.tet, 2)),
-                                   depth_(tets_(p.tet, 3))};
-  return tet_polygon_penalty(p.polygon, P, Q, g, options_.penalty, min_area2_);
+  return tet_polygon_penalty(p.polygon, P, Q, pair_depths(p), options_.penalty, min_area2_);
 }
 
-MaterialDepthContact::PairDerivatives MaterialDepthContact::pair_derivatives(const Points& x,
-                                                                            const ContactPair& p) const {
-  using D = Dual2<21>;
-  std::array<V3<D>, 4> P;
-  std::array<V3<D>, 3> Q;
-  for (int a = 0; a < 4; ++a) P[a] = make_point<D>(x.row(tets_(p.tet, a)), 3 * a);
-  for (int b = 0; b < 3; ++b) Q[b] = make_point<D>(x.row(tris_(p.tri, b)), 12 + 3 * b);
-  const std::array<double, 4> g = {depth_(tets_(p.tet, 0)), depth_(tets_(p.tet, 1)), depth_(tets_(p.tet, 2)),
-                                   depth_(tets_(p.tet, 3))};
-  const D W = tet_polygon_penalty(p.polygon, P, Q, g, options_.penalty, min_area2_);
-  return {W.v, W.g, W.h};
+double MaterialDepthContact::pair_derivatives(const Points& x, const ContactPair& p,
+                                              PairGradient& gradient, PairHessian* hessian) const {
+  return tet_polygon_penalty_derivatives(p.polygon, tet_corners(x, tets_, p.tet),
+                                         tri_corners(x, tris_, p.tri), pair_depths(p),
+                                         options_.penalty, min_area2_, gradient, hessian);
 }
 
-double MaterialDepthContact::evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const {
+double MaterialDepthContact::evaluate(const Points& x, VectorX* gradient,
+                                      BlockSparseMatrix* hessian) const {
   const Index n = static_cast<Index>(pairs_.size());
   if (!gradient) {
     return tbb::parallel_deterministic_reduce(
@@ -134,22 +139,25 @@ double MaterialDepthContact::evaluate(const Points& x, VectorX* gradient, BlockS
         },
         std::plus<double>());
   }
-  // Derivatives per pair in parallel, then scattered in pair order.
-  std::vector<PairDerivatives> local(static_cast<size_t>(n));
+  // Derivatives per pair in parallel (Hessians only when asked for), then scattered in pair order.
+  std::vector<double> energies(static_cast<size_t>(n));
+  std::vector<PairGradient> gradients(static_cast<size_t>(n));
+  std::vector<PairHessian> hessians(hessian ? static_cast<size_t>(n) : 0);
   tbb::parallel_for(tbb::blocked_range<Index>(0, n, 16), [&](const tbb::blocked_range<Index>& r) {
-    for (Index k = r.begin(); k < r.end(); ++k) local[k] = pair_derivatives(x, pairs_[k]);
+    for (Index k = r.begin(); k < r.end(); ++k)
+      energies[k] = pair_derivatives(x, pairs_[k], gradients[k], hessian ? &hessians[k] : nullptr);
   });
   double energy = 0;
   stats_.force = 0;
   for (Index k = 0; k < n; ++k) {
     const std::array<Index, 7> v = pair_nodes(pairs_[k]);
-    energy += local[k].energy;
-    stats_.force += local[k].gradient.tail<9>().reshaped(3, 3).rowwise().sum().norm();
-    for (int a = 0; a < 7; ++a) gradient->segment<3>(3 * v[a]) += local[k].gradient.segment<3>(3 * a);
+    energy += energies[k];
+    stats_.force += gradients[k].tail<9>().reshaped(3, 3).rowwise().sum().norm();
+    for (int a = 0; a < 7; ++a) gradient->segment<3>(3 * v[a]) += gradients[k].segment<3>(3 * a);
     if (!hessian) continue;
     for (int a = 0; a < 7; ++a)
       for (int b = 0; b < 7; ++b)
-        hessian->add_block(hessian->block_index(v[a], v[b]), local[k].hessian.block<3, 3>(3 * a, 3 * b));
+        hessian->add_block(hessian->block_index(v[a], v[b]), hessians[k].block<3, 3>(3 * a, 3 * b));
   }
   return energy;
 }

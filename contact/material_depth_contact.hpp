@@ -7,8 +7,9 @@
 
 #include "contact/aabb_tree.hpp"
 #include "contact/clip.hpp"
-#include "core/mesh.hpp"
+#include "contact/penalty_derivatives.hpp"
 #include "core/force_module.hpp"
+#include "core/mesh.hpp"
 
 namespace depthfem {
 
@@ -25,11 +26,11 @@ struct ContactPair {
 
 /// What the active pairs amount to at the last prepare() (and evaluate(), for the force).
 struct ContactStats {
-  Index candidates = 0;      ///< triangle-tet pairs whose boxes overlap
-  Index active = 0;          ///< pairs with an intersection polygon
-  double area = 0;           ///< total intersection area [m^2]
-  double force = 0;          ///< sum over pairs of |penalty force on the triangle| [N], from the
-                             ///< last evaluation with a gradient
+  Index candidates = 0;  ///< triangle-tet pairs whose boxes overlap
+  Index active = 0;      ///< pairs with an intersection polygon
+  double area = 0;       ///< total intersection area [m^2]
+  double force = 0;      ///< sum over pairs of |penalty force on the triangle| [N], from the
+                         ///< last evaluation with a gradient
 };
 
 /// The contact force module. Geometry (tree, clipping, depth lookup) lives in aabb_tree, clip
@@ -52,18 +53,15 @@ class MaterialDepthContact final : public ForceModule {
   const std::vector<ContactPair>& pairs() const { return pairs_; }
   ContactStats stats() const { return stats_; }
 
-  /// Energy, gradient (21) and Hessian (21 x 21) of one pair; variables: tet corners 0..11,
-  /// triangle corners 12..20.
-  struct PairDerivatives {
-    double energy = 0;
-    Eigen::Matrix<double, 21, 1> gradient;
-    Eigen::Matrix<double, 21, 21> hessian;
-  };
-  PairDerivatives pair_derivatives(const Points& x, const ContactPair& p) const;
+  /// Energy of one pair (returned), its gradient (21) and, where `hessian` is not null, its
+  /// Hessian (21 x 21); variables: tet corners 0..11, triangle corners 12..20.
+  double pair_derivatives(const Points& x, const ContactPair& p, PairGradient& gradient,
+                          PairHessian* hessian) const;
   double pair_energy(const Points& x, const ContactPair& p) const;
 
  private:
   std::array<Index, 7> pair_nodes(const ContactPair& p) const;
+  std::array<double, 4> pair_depths(const ContactPair& p) const;
 
   TetIndices tets_;
   TriIndices tris_;

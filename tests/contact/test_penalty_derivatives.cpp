@@ -1,9 +1,11 @@
-// Exact derivatives of the pair penalty against finite differences, in every clip case.
+// Exact derivatives of the pair penalty: automatic differentiation (Dual2<21>) against finite
+// differences, and the staged chain rule against automatic differentiation, in every clip case.
 #include <gtest/gtest.h>
 
 #include <random>
 
 #include "contact/penalty.hpp"
+#include "contact/penalty_derivatives.hpp"
 
 namespace depthfem {
 namespace {
@@ -29,7 +31,8 @@ Dual2<21> energy_dual(const Vec21& z, const std::array<double, 4>& g, ClipPolygo
   std::array<V3<D>, 4> Pv;
   std::array<V3<D>, 3> Qv;
   for (int a = 0; a < 4; ++a) P[a] = z.segment<3>(3 * a), Pv[a] = make_point<D>(P[a], 3 * a);
-  for (int b = 0; b < 3; ++b) Q[b] = z.segment<3>(12 + 3 * b), Qv[b] = make_point<D>(Q[b], 12 + 3 * b);
+  for (int b = 0; b < 3; ++b)
+    Q[b] = z.segment<3>(12 + 3 * b), Qv[b] = make_point<D>(Q[b], 12 + 3 * b);
   *out = clip_triangle_by_tet(P, Q);
   return tet_polygon_penalty(*out, Pv, Qv, g, kEps, 0.0);
 }
@@ -65,8 +68,10 @@ TEST(PenaltyDerivatives, MatchFiniteDifferencesInEveryClipCase) {
       ClipPolygon pp, pm;
       hess_fd.col(i) = (energy_dual(zp, g, &pp).g - energy_dual(zm, g, &pm).g) / (2 * h);
     }
-    EXPECT_LE((W.g - grad_fd).cwiseAbs().maxCoeff(), 1e-6 * W.g.cwiseAbs().maxCoeff()) << "config " << tested;
-    EXPECT_LE((W.h - hess_fd).cwiseAbs().maxCoeff(), 1e-5 * W.h.cwiseAbs().maxCoeff()) << "config " << tested;
+    EXPECT_LE((W.g - grad_fd).cwiseAbs().maxCoeff(), 1e-6 * W.g.cwiseAbs().maxCoeff())
+        << "config " << tested;
+    EXPECT_LE((W.h - hess_fd).cwiseAbs().maxCoeff(), 1e-5 * W.h.cwiseAbs().maxCoeff())
+        << "config " << tested;
     EXPECT_LE((W.h - W.h.transpose()).cwiseAbs().maxCoeff(), 1e-12 * W.h.cwiseAbs().maxCoeff());
     // Translation invariance: forces sum to zero.
     for (int k = 0; k < 3; ++k) {
@@ -76,6 +81,130 @@ TEST(PenaltyDerivatives, MatchFiniteDifferencesInEveryClipCase) {
     }
   }
   for (int k = 0; k < 3; ++k) EXPECT_GT(kinds[k], 5) << "vertex kind " << k << " not covered";
+}
+
+// The reference tet with each corner moved by up to 0.15 in each coordinate.
+std::array<Vec3, 4> jittered_tet(std::mt19937& rng) {
+  std::uniform_real_distribution<double> jitter(-0.15, 0.15);
+  std::array<Vec3, 4> P = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
+  for (Vec3& p : P) p += Vec3(jitter(rng), jitter(rng), jitter(rng));
+  return P;
+}
+
+// Fan triangles of the polygon that do not count (zero area up to rounding).
+int skipped_fan_triangles(const ClipPolygon& poly, const std::array<Vec3, 4>& P,
+                          const std::array<Vec3, 3>& Q, double min_area2) {
+  std::array<V3<double>, 4> Pv;
+  std::array<V3<double>, 3> Qv;
+  for (int a = 0; a < 4; ++a) Pv[a] = make_point<double>(P[a], 0);
+  for (int b = 0; b < 3; ++b) Qv[b] = make_point<double>(Q[b], 0);
+  int skipped = 0;
+  for (int k = 1; k + 1 < poly.size; ++k) {
+    const V3<double> c =
+        area_vector(clip_vertex(poly.vertex[0], Pv, Qv), clip_vertex(poly.vertex[k], Pv, Qv),
+                    clip_vertex(poly.vertex[k + 1], Pv, Qv));
+    skipped += !fan_triangle_counts(c.dot(c), min_area2);
+  }
+  return skipped;
+}
+
+// The staged derivatives against Dual2<21> on the same polygon. Both are exact; they differ by
+// rounding only, a few ulps of the largest terms times the conditioning of the crossings
+// (1 / (d_A - d_B)): observed up to about 1e-12 relative to the largest entry, so 1e-10 leaves
+// a margin near 100. The energies agree to rounding as well: the same formulas, rounded differently
+// where the compiler fuses multiply-adds (1e-11 relative covers tiny polygons cut near a tet
+// corner, whose crossings cancel digits). The gradient-only call gives the same gradient.
+void expect_staged_equals_dual(const ClipPolygon& poly, const std::array<Vec3, 4>& P,
+                               const std::array<Vec3, 3>& Q, const std::array<double, 4>& g,
+                               double min_area2) {
+  using D = Dual2<21>;
+  std::array<V3<D>, 4> Pd;
+  std::array<V3<D>, 3> Qd;
+  std::array<V3<double>, 4> Pv;
+  std::array<V3<double>, 3> Qv;
+  for (int a = 0; a < 4; ++a)
+    Pd[a] = make_point<D>(P[a], 3 * a), Pv[a] = make_point<double>(P[a], 0);
+  for (int b = 0; b < 3; ++b)
+    Qd[b] = make_point<D>(Q[b], 12 + 3 * b), Qv[b] = make_point<double>(Q[b], 0);
+  const D W = tet_polygon_penalty(poly, Pd, Qd, g, kEps, min_area2);
+  PairGradient grad, grad_only;
+  PairHessian hess;
+  const double energy =
+      tet_polygon_penalty_derivatives(poly, P, Q, g, kEps, min_area2, grad, &hess);
+  const double energy_only =
+      tet_polygon_penalty_derivatives(poly, P, Q, g, kEps, min_area2, grad_only, nullptr);
+  EXPECT_NEAR(energy, tet_polygon_penalty(poly, Pv, Qv, g, kEps, min_area2), 1e-11 * energy);
+  EXPECT_NEAR(energy, W.v, 1e-11 * W.v);
+  EXPECT_DOUBLE_EQ(energy_only, energy);
+  const double gmax = W.g.cwiseAbs().maxCoeff(), hmax = W.h.cwiseAbs().maxCoeff();
+  EXPECT_LE((grad - W.g).cwiseAbs().maxCoeff(), 1e-10 * gmax);
+  EXPECT_LE((hess - W.h).cwiseAbs().maxCoeff(), 1e-10 * hmax);
+  EXPECT_LE((grad_only - grad).cwiseAbs().maxCoeff(), 1e-15 * gmax);
+}
+
+TEST(StagedContactDerivatives, EqualAutomaticDifferentiationInEveryClipCase) {
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<double> u(-0.4, 1.2);
+  const std::array<double, 4> g = {0.02, 0.35, 0.1, 0.6};
+  int tested = 0, kinds[3] = {0, 0, 0}, sizes[8] = {};
+  while (tested < 200) {
+    const std::array<Vec3, 4> P = jittered_tet(rng);
+    const std::array<Vec3, 3> Q = {Vec3(u(rng), u(rng), u(rng)), Vec3(u(rng), u(rng), u(rng)),
+                                   Vec3(u(rng), u(rng), u(rng))};
+    const ClipPolygon poly = clip_triangle_by_tet(P, Q);
+    if (poly.size < 3) continue;
+    ++tested;
+    ++sizes[poly.size];
+    for (int k = 0; k < poly.size; ++k) ++kinds[static_cast<int>(poly.vertex[k].kind)];
+    SCOPED_TRACE("configuration " + std::to_string(tested));
+    expect_staged_equals_dual(poly, P, Q, g, 0.0);
+  }
+  for (int k = 0; k < 3; ++k) EXPECT_GT(kinds[k], 20) << "vertex kind " << k << " not covered";
+  for (int n = 3; n <= 6; ++n) EXPECT_GT(sizes[n], 0) << "no polygon with " << n << " vertices";
+}
+
+// Degenerate polygons: a triangle corner on a tet face (one neighbour inside, one outside), or a
+// triangle edge through a tet edge, make the clip repeat a point, so that some fan triangles have
+// zero area up to rounding. With the module's threshold (area 1e-12 of an element face) they do
+// not count, for the energy and the derivatives alike.
+TEST(StagedContactDerivatives, EqualAutomaticDifferentiationWithDegenerateFanTriangles) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(0, 1), u(-0.4, 1.2);
+  const std::array<double, 4> g = {0.3, 0.05, 0.2, 0.45};
+  const double min_area2 = 1e-24;
+  int tested = 0, skipped = 0, kinds[3] = {0, 0, 0};
+  for (int trial = 0; trial < 400; ++trial) {
+    const std::array<Vec3, 4> P = jittered_tet(rng);
+    const Vec3 centroid = (P[0] + P[1] + P[2] + P[3]) / 4;
+    std::array<Vec3, 3> Q;
+    if (trial % 2 == 0) {  // corner Q0 on face f, Q1 inside the tet, Q2 beyond the face
+      const int f = trial / 2 % 4;
+      const Vec3 &A = P[kTetFace[f][0]], &B = P[kTetFace[f][1]], &C = P[kTetFace[f][2]];
+      const double s = 0.1 + 0.5 * unit(rng), t = 0.1 + 0.4 * unit(rng) * (1 - s);
+      Q[0] = A + s * (B - A) + t * (C - A);
+      Q[1] =
+          Q[0] + (0.3 + 0.6 * unit(rng)) * (centroid - Q[0]) + 0.05 * Vec3(u(rng), u(rng), u(rng));
+      Q[2] =
+          Q[0] - (0.3 + 0.6 * unit(rng)) * (centroid - Q[0]) + 0.3 * Vec3(u(rng), u(rng), u(rng));
+    } else {  // edge Q0 Q1 through a point of tet edge (a, b)
+      const int a = trial / 2 % 4, b = (a + 1 + trial / 8 % 3) % 4;
+      const Vec3 X = P[a] + (0.2 + 0.6 * unit(rng)) * (P[b] - P[a]);
+      const Vec3 dir = Vec3(u(rng), u(rng), u(rng));
+      Q[0] = X - (0.2 + unit(rng)) * dir;
+      Q[1] = X + (0.2 + unit(rng)) * dir;
+      Q[2] = centroid + Vec3(u(rng), u(rng), u(rng));
+    }
+    const ClipPolygon poly = clip_triangle_by_tet(P, Q);
+    if (poly.size < 3) continue;
+    ++tested;
+    skipped += skipped_fan_triangles(poly, P, Q, min_area2);
+    for (int k = 0; k < poly.size; ++k) ++kinds[static_cast<int>(poly.vertex[k].kind)];
+    SCOPED_TRACE("trial " + std::to_string(trial));
+    expect_staged_equals_dual(poly, P, Q, g, min_area2);
+  }
+  EXPECT_GT(tested, 200);
+  EXPECT_GT(skipped, 50) << "too few zero-area fan triangles";
+  for (int k = 0; k < 3; ++k) EXPECT_GT(kinds[k], 20) << "vertex kind " << k << " not covered";
 }
 
 }  // namespace
