@@ -129,8 +129,13 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   // One completed step (static increment or time step): summary, progress line, results file.
   const auto record = [&](Index index, double load, const char* tag, const NewtonResult& newton, double seconds,
                           const Points& x, const Points* v, const VectorX& gradient) {
-    StepSummary sum{load, newton.iterations, newton.linear_iterations, newton.energy, newton.residuals.back(),
-                    constraints.reactions(gradient)};
+    StepSummary sum;
+    sum.load = load;
+    sum.newton_iterations = newton.iterations;
+    sum.linear_iterations = newton.linear_iterations;
+    sum.energy = newton.energy;
+    sum.residual = newton.residuals.back();
+    sum.reactions = constraints.reactions(gradient);
     if (contact) {
       sum.contact_area = contact->stats().area;
       sum.contact_force = contact->stats().force;  // the step's gradient was just evaluated at x

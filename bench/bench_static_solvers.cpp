@@ -56,7 +56,7 @@ int main(int argc, char** argv) {
         o.push_back(parse_override(std::string("solver.line_search=") + rule));
         const Scene scene = load_scene(dir + c.scene + ".json", o);
         std::ostringstream log;
-        const RunResult r = run_scene(scene, {"", 0}, log);
+        const RunResult r = run_scene(scene, RunOptions(), log);
         long newton = 0, linear = 0;
         for (const StepSummary& s : r.steps) {
           newton += s.newton_iterations;

@@ -21,7 +21,9 @@ inline Scene load(const std::string& name, const std::vector<std::string>& overr
 
 inline RunResult run(const Scene& scene, const std::string& out = "") {
   std::ostringstream log;
-  return run_scene(scene, {out, 0}, log);
+  RunOptions options;
+  options.out = out;
+  return run_scene(scene, options, log);
 }
 
 }  // namespace depthfem::testing
