@@ -25,21 +25,8 @@ class AabbTree {
   /// Calls visit(primitive) for every primitive whose box intersects `query`.
   template <class Visit>
   void query(const Box3& query, Visit&& visit) const {
-    if (nodes_.empty()) return;
-    Index stack[64];
-    int top = 0;
-    stack[top++] = 0;
-    while (top) {
-      const Node& n = nodes_[stack[--top]];
-      if (!n.box.intersects(query)) continue;
-      if (n.count > 0) {
-        for (Index k = n.first; k < n.first + n.count; ++k)
-          if (boxes_[order_[k]].intersects(query)) visit(order_[k]);
-      } else {
-        stack[top++] = n.first;
-        stack[top++] = n.first + 1;
-      }
-    }
+    walk([&](const Box3& b) { return !b.intersects(query); }, visit,
+         [](const Box3&, const Box3&) { return false; });
   }
 
   /// Calls visit(primitive, lower_bound) for primitives in order of increasing box distance
@@ -47,24 +34,9 @@ class AabbTree {
   /// for the nearest primitive by branch and bound.
   template <class Visit>
   void nearest(const Vec3& p, double best_squared, Visit&& visit) const {
-    if (nodes_.empty()) return;
-    Index stack[64];
-    int top = 0;
-    stack[top++] = 0;
-    while (top) {
-      const Node& n = nodes_[stack[--top]];
-      if (n.box.squaredExteriorDistance(p) >= best_squared) continue;
-      if (n.count > 0) {
-        for (Index k = n.first; k < n.first + n.count; ++k)
-          if (boxes_[order_[k]].squaredExteriorDistance(p) < best_squared) best_squared = visit(order_[k], best_squared);
-      } else {
-        // Visit the nearer child first (pushed last).
-        const double dl = nodes_[n.first].box.squaredExteriorDistance(p);
-        const double dr = nodes_[n.first + 1].box.squaredExteriorDistance(p);
-        stack[top++] = dl < dr ? n.first + 1 : n.first;
-        stack[top++] = dl < dr ? n.first : n.first + 1;
-      }
-    }
+    walk([&](const Box3& b) { return b.squaredExteriorDistance(p) >= best_squared; },
+         [&](Index primitive) { best_squared = visit(primitive, best_squared); },
+         [&](const Box3& l, const Box3& r) { return l.squaredExteriorDistance(p) < r.squaredExteriorDistance(p); });
   }
 
   Index size() const { return static_cast<Index>(boxes_.size()); }
@@ -77,6 +49,29 @@ class AabbTree {
     Index count = 0;  ///< leaf: number of primitives; inner: 0
   };
   void build(Index node, Index begin, Index end, int leaf_size, std::vector<Vec3>& centers);
+
+  /// Depth-first walk that skips every node and primitive box `pruned(box)` rejects (it may
+  /// tighten as the walk goes), calls visit(primitive) for the rest, and descends into the left
+  /// child first where left_first(left box, right box) holds.
+  template <class Pruned, class Visit, class LeftFirst>
+  void walk(Pruned&& pruned, Visit&& visit, LeftFirst&& left_first) const {
+    if (nodes_.empty()) return;
+    Index stack[64];
+    int top = 0;
+    stack[top++] = 0;
+    while (top) {
+      const Node& n = nodes_[stack[--top]];
+      if (pruned(n.box)) continue;
+      if (n.count > 0) {
+        for (Index k = n.first; k < n.first + n.count; ++k)
+          if (!pruned(boxes_[order_[k]])) visit(order_[k]);
+      } else {
+        const bool left = left_first(nodes_[n.first].box, nodes_[n.first + 1].box);
+        stack[top++] = left ? n.first + 1 : n.first;  // the last pushed is visited first
+        stack[top++] = left ? n.first : n.first + 1;
+      }
+    }
+  }
 
   std::vector<Node> nodes_;
   std::vector<Index> order_;
