@@ -199,7 +199,7 @@ void read_dynamic(JsonObject d, Scene& scene) {
     o.arkode.relative_tolerance = a.number("relative_tolerance", o.arkode.relative_tolerance);
     o.arkode.absolute_tolerance = a.number("absolute_tolerance", o.arkode.absolute_tolerance);
     o.arkode.max_steps = a.integer("max_steps", static_cast<int>(o.arkode.max_steps));
-    if (o.arkode.order < 2 || o.arkode.order > 8 || o.arkode.order == 7) a.fail("order", "must be 2, 3, 4, 5, 6 or 8");
+    if (!has_erk_table(o.arkode.order)) a.fail("order", "must be 2, 3, 4, 5, 6 or 8");
     if (!(o.arkode.relative_tolerance > 0)) a.fail("relative_tolerance", "must be > 0");
     if (!(o.arkode.absolute_tolerance > 0)) a.fail("absolute_tolerance", "must be > 0");
     if (!(o.arkode.max_steps > 0)) a.fail("max_steps", "must be > 0");

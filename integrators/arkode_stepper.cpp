@@ -75,9 +75,8 @@ void check(int flag, const char* call) {
 
 ArkodeStepper::ArkodeStepper(System& system, const Constraints& constraints, VectorX mass, DynamicOptions options)
     : system_(system), constraints_(constraints), mass_(std::move(mass)), options_(options) {
-  const int order = options_.arkode.order;
-  if (order < 2 || order > 8 || order == 7) {
-    throw InputError("arkode: no explicit Runge-Kutta table of order " + std::to_string(order) +
+  if (!has_erk_table(options_.arkode.order)) {
+    throw InputError("arkode: no explicit Runge-Kutta table of order " + std::to_string(options_.arkode.order) +
                      " (expected 2, 3, 4, 5, 6 or 8)");
   }
   if (options_.damping.stiffness != 0) {

@@ -26,9 +26,12 @@ struct RayleighDamping {
   double stiffness = 0;  ///< beta [s]; implicit integrators only
 };
 
+/// Whether ERKStep has a default explicit Runge-Kutta table of this order (2, 3, 4, 5, 6 or 8).
+constexpr bool has_erk_table(int order) { return order >= 2 && order <= 8 && order != 7; }
+
 /// ERKStep settings (integrator kArkode).
 struct ArkodeOptions {
-  int order = 4;                     ///< 2, 3, 4, 5, 6 or 8 (the default table of that order)
+  int order = 4;                     ///< one with has_erk_table(order)
   double relative_tolerance = 1e-6;
   double absolute_tolerance = 1e-9;  ///< [m] on positions, [m/s] on velocities
   long max_steps = 100000;           ///< internal steps per output interval
