@@ -125,8 +125,9 @@ TEST(DynamicScenes, ImplicitEulerEnergyDecreasesMonotonically) {
 }
 
 // Newmark's average-acceleration rule conserves the energy of linear systems exactly and has no
-// numerical dissipation: on the swinging (nonlinear) bars the mechanical energy stays within 2 %
-// of the largest kinetic energy over 1 s, where implicit Euler at the same step loses over half.
+// numerical dissipation: on the swinging (nonlinear) bars the mechanical energy stays within 0.5 %
+// of the largest kinetic energy over 1 s (measured 0.1 %; the nonlinear terms leave an O(h^2)
+// error), where implicit Euler at the same step loses over 30 % (measured 42 %).
 TEST(DynamicScenes, NewmarkKeepsTheEnergyImplicitEulerDissipates) {
   double lost[2] = {0, 0};
   for (int k = 0; k < 2; ++k) {
@@ -143,7 +144,7 @@ TEST(DynamicScenes, NewmarkKeepsTheEnergyImplicitEulerDissipates) {
     }
     lost[k] /= kinetic;
   }
-  EXPECT_LT(lost[0], 0.02) << "Newmark";
+  EXPECT_LT(lost[0], 0.005) << "Newmark";
   EXPECT_GT(lost[1], 0.3) << "implicit Euler";
   std::printf("energy error / peak kinetic energy: Newmark %.4f, implicit Euler %.4f\n", lost[0], lost[1]);
 }
