@@ -159,7 +159,8 @@ TEST(StaticScenes, FailedRunKeepsCompletedIncrements) {
 // Every scene shipped in apps/scenes is run by some test; this list is checked against the folder.
 TEST(StaticScenes, EveryShippedSceneIsTested) {
   const std::set<std::string> tested = {"cantilever_gravity", "uniaxial_block", "twist_bar", "buckling_column",
-                                        "blocks_overlap", "ball_drop", "sliding_blocks", "falling_bars", "bars_drop"};
+                                        "blocks_overlap", "ball_drop", "sliding_blocks", "falling_bars", "bars_drop",
+                                        "hertz_sphere", "fold_slab"};
   for (const auto& entry : std::filesystem::directory_iterator(std::string(DEPTHFEM_SOURCE_DIR) + "/apps/scenes")) {
     if (entry.path().extension() != ".json") continue;
     EXPECT_TRUE(tested.count(entry.path().stem().string())) << entry.path() << " has no test";
