@@ -32,10 +32,12 @@ TetMesh read_body_mesh(JsonObject m, const std::string& scene_dir) {
     } else if (gen == "tube") {
       mesh = tube_mesh({m.number("inner_radius"), m.number("outer_radius"), m.number("length"),
                         m.integer("cells_through_wall"), m.integer("cells_around"), m.integer("cells_along")});
+    } else if (gen == "corner") {
+      mesh = corner_mesh({m.number("size"), m.number("core"), m.integer("core_cells"), m.number("ratio")});
     } else if (gen == "ball") {
       mesh = ball_mesh({m.vec3("center", Vec3::Zero()), m.number("radius"), m.integer("cells_per_axis")});
     } else {
-      m.fail("generator", "unknown generator '" + gen + "' (expected box, tube or ball)");
+      m.fail("generator", "unknown generator '" + gen + "' (expected box, tube, ball or corner)");
     }
   }
   mesh.X.rowwise() += m.vec3("translate", Vec3::Zero()).transpose();

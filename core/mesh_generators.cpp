@@ -1,7 +1,10 @@
 #include "core/mesh_generators.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <numbers>
 #include <string>
 
@@ -102,6 +105,54 @@ TetMesh ball_mesh(const BallParams& p) {
   }
   validate_and_orient(m);
   return m;
+}
+
+TetMesh corner_mesh(const CornerParams& p) {
+  require(p.core > 0 && p.size > p.core, "corner: need 0 < core < size");
+  require(p.core_cells >= 1, "corner: core_cells must be >= 1");
+  require(p.ratio > 1, "corner: ratio must be > 1");
+  const int m = p.core_cells;
+  const int shells = std::max(1, static_cast<int>(std::ceil(std::log(p.size / p.core) / std::log(p.ratio) - 1e-9)));
+  const double q = std::pow(p.size / p.core, 1.0 / shells);
+  // Nodes shared by the blocks are computed by the same expressions, so they coincide exactly.
+  std::map<std::array<double, 3>, Index> index;
+  std::vector<Vec3> points;
+  const auto node = [&](const Vec3& x) {
+    const auto [it, inserted] = index.try_emplace({x(0), x(1), x(2)}, static_cast<Index>(points.size()));
+    if (inserted) points.push_back(x);
+    return it->second;
+  };
+  const auto frac = [m](int i) { return static_cast<double>(i) / m; };
+  std::vector<TetIndices> blocks;
+  blocks.push_back(kuhn_tets(m, m, m, [&](int i, int j, int k) {
+    return node(p.core * Vec3(frac(i), frac(j), frac(k)));
+  }));
+  // One block of shells per cube face a = max: in-face axes b < c, both increasing, so that the
+  // Kuhn diagonals of the faces two blocks (or a block and the core) share agree.
+  for (int a = 0; a < 3; ++a) {
+    const int b = a == 0 ? 1 : 0, c = a == 2 ? 1 : 2;
+    blocks.push_back(kuhn_tets(m, m, shells, [&](int u, int v, int k) {
+      const double r = k == shells ? p.size : p.core * std::pow(q, k);
+      Vec3 x;
+      x(a) = r;
+      x(b) = r * frac(u);
+      x(c) = r * frac(v);
+      return node(x);
+    }));
+  }
+  TetMesh mesh;
+  mesh.X.resize(static_cast<Index>(points.size()), 3);
+  for (size_t i = 0; i < points.size(); ++i) mesh.X.row(static_cast<Index>(i)) = points[i].transpose();
+  Index total = 0;
+  for (const TetIndices& t : blocks) total += static_cast<Index>(t.rows());
+  mesh.tets.resize(total, 4);
+  Index row = 0;
+  for (const TetIndices& t : blocks) {
+    mesh.tets.middleRows(row, t.rows()) = t;
+    row += static_cast<Index>(t.rows());
+  }
+  validate_and_orient(mesh);
+  return mesh;
 }
 
 }  // namespace depthfem

@@ -35,11 +35,26 @@ struct BallParams {
   int cells_per_axis = 4;      ///< cells along each axis of the underlying cube (>= 1)
 };
 
+/// Cube [0, size]^3 graded towards the corner at the origin (a point load or contact at a corner
+/// of a symmetric model): a core cube of edge `core` with core_cells^3 uniform cells, then
+/// shells between nested cubes whose edges grow geometrically to `size` (by `ratio`, adjusted so
+/// that the last is exactly `size`), each face of a shell divided into core_cells^2 cells. Cells
+/// keep their shape while growing (aspect ratio about (ratio - 1) core_cells), unlike per-axis
+/// grading, whose cells far along one axis and near another are slivers.
+struct CornerParams {
+  double size = 1.0;   ///< [m]
+  double core = 0.1;   ///< [m], < size
+  int core_cells = 8;  ///< >= 1
+  double ratio = 1.2;  ///< > 1
+};
+
 /// Box mesh with (n+1)^3 nodes and 6 n^3 tets; node (i, j, k) has index i + (nx+1)(j + (ny+1) k).
 TetMesh box_mesh(const BoxParams& p);
 /// Tube mesh; throws InputError for non-positive sizes or radii out of order.
 TetMesh tube_mesh(const TubeParams& p);
 /// Ball mesh; throws InputError for a non-positive radius or resolution.
 TetMesh ball_mesh(const BallParams& p);
+/// Corner-graded cube; throws InputError for sizes out of order, no cells or ratio <= 1.
+TetMesh corner_mesh(const CornerParams& p);
 
 }  // namespace depthfem

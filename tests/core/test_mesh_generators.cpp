@@ -61,6 +61,33 @@ TEST(BoxMesh, CountsVolumeAndBoundary) {
   }
 }
 
+// The core and the three shell blocks must share their faces node for node and diagonal for
+// diagonal: a mismatch would leave inner faces on the boundary (not closed, wrong volume).
+TEST(CornerMesh, ConformingCubeWithShellsGrowingGeometrically) {
+  const int m = 3;
+  const TetMesh mesh = corner_mesh({2.0, 0.1, m, 1.5});
+  const int shells = static_cast<int>(std::ceil(std::log(20.0) / std::log(1.5)));  // 0.1 -> 2
+  EXPECT_EQ(mesh.X.rows(), (m + 1) * (m + 1) * (m + 1) + shells * ((m + 1) * (m + 1) * (m + 1) - m * m * m));
+  EXPECT_EQ(mesh.tets.rows(), 6 * m * m * m + 18 * m * m * shells);
+  EXPECT_NEAR(total_volume(mesh), 8.0, 1e-12);
+  const BoundaryFaces b = boundary_faces(mesh.tets);
+  EXPECT_NEAR(enclosed_volume(mesh.X, b.tris), 8.0, 1e-12);
+  expect_closed_oriented(b.tris);
+  for (Index f = 0; f < b.tris.rows(); ++f)  // every boundary triangle lies on a face of the cube
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 x = mesh.X.row(b.tris(f, k));
+      EXPECT_TRUE(x.minCoeff() == 0 || x.maxCoeff() == 2.0) << x.transpose();
+    }
+  EXPECT_NEAR(mesh.X.col(0).cwiseAbs().maxCoeff(), 2.0, 0);
+  // Smallest cells at the corner: the core's, 0.1 / 3.
+  double shortest = 1e300;
+  for (Index t = 0; t < mesh.tets.rows(); ++t)
+    for (int a = 0; a < 4; ++a)
+      for (int c = a + 1; c < 4; ++c)
+        shortest = std::min(shortest, (mesh.X.row(mesh.tets(t, a)) - mesh.X.row(mesh.tets(t, c))).norm());
+  EXPECT_NEAR(shortest, 0.1 / m, 1e-12);
+}
+
 TEST(TubeMesh, VolumeIsThatOfThePolygonalShell) {
   const TubeParams p{0.3, 0.5, 2.0, 2, 12, 5};
   const TetMesh m = tube_mesh(p);
@@ -101,6 +128,9 @@ TEST(Generators, RejectBadParameters) {
   EXPECT_THROW(tube_mesh({0.0, 0.4, 1, 1, 8, 1}), InputError);
   EXPECT_THROW(tube_mesh({0.1, 0.4, 1, 1, 2, 1}), InputError);
   EXPECT_THROW(ball_mesh({Vec3::Zero(), -1, 2}), InputError);
+  EXPECT_THROW(corner_mesh({1.0, 2.0, 4, 1.2}), InputError);
+  EXPECT_THROW(corner_mesh({1.0, 0.1, 0, 1.2}), InputError);
+  EXPECT_THROW(corner_mesh({1.0, 0.1, 4, 1.0}), InputError);
 }
 
 TEST(Mesh, BodiesAreAppendedWithOffsets) {
