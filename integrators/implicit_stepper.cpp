@@ -27,7 +27,7 @@ Points ImplicitStepper::initial_acceleration(const Points& x, const Points& v) {
   }
   system_.begin_step(x, 0.0);
   system_.prepare(x);
-  VectorX g;
+  VectorX g;  // hessian(), not gradient(): it binds the pattern a stiffness tether assembles into
   if (!std::isfinite(system_.hessian(x, g))) throw SolveError("the initial configuration is illegal");
   constraints_.project(g);
   Points a = -as_points(g);

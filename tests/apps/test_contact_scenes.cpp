@@ -117,9 +117,9 @@ double hertz_scene_error(const StepSummary& step) {
 
 // Force against indentation at every step, d/R = 0.001 to 0.05, within 5 % of Hertz. Measured
 // with the shipped corner-graded mesh (12 cells per core edge, shells growing 10 %, block 32 R):
-// +2.2 % to +4.6 %, rising with d. Coarser meshes of the same kind give +3.8 % to +5.9 % (8 cells,
-// 32 R) and +4.0 % to +6.5 % (8 cells, 16 R); a box graded 30 % per cell along each axis gave
-// +6.7 % to +8.1 %. The error budget: the stiffness of linear tets (the largest part, falling with
+// +2.2 % to +4.6 %, rising with d. For d/R = 0.008 to 0.05, coarser meshes of the same kind give
+// +3.8 % to +5.9 % (8 cells, 32 R) and +4.0 % to +6.5 % (8 cells, 16 R); a box graded 30 % per
+// cell along each axis gave +6.7 % to +8.1 %. The error budget: the stiffness of linear tets (the largest part, falling with
 // the mesh), the base held at depth H (a Boussinesq estimate +1.09 a/H: at most +0.8 % at 32 R, the
 // rise with d), penalty compliance (about -0.5 %) and the sphere against Hertz's paraboloid
 // (-0.1 d/R). The run takes about 3.5 minutes on two cores.
