@@ -8,7 +8,8 @@ namespace depthfem {
 
 JsonObject::JsonObject(const nlohmann::json& j, std::string path, std::string file)
     : j_(j), path_(std::move(path)), file_(std::move(file)) {
-  if (!j_.is_object()) throw InputError(file_ + ": " + (path_.empty() ? "the scene" : path_) + ": expected an object");
+  if (!j_.is_object())
+    throw InputError(file_ + ": " + (path_.empty() ? "the scene" : path_) + ": expected an object");
 }
 
 std::string JsonObject::key_path(const std::string& key) const {
@@ -33,14 +34,18 @@ double JsonObject::number(const std::string& key) {
   if (!std::isfinite(d)) fail(key, "expected a finite number");
   return d;
 }
-double JsonObject::number(const std::string& key, double fallback) { return has(key) ? number(key) : (ignore(key), fallback); }
+double JsonObject::number(const std::string& key, double fallback) {
+  return has(key) ? number(key) : (ignore(key), fallback);
+}
 
 int JsonObject::integer(const std::string& key) {
   const nlohmann::json& v = at(key);
   if (!v.is_number_integer()) fail(key, "expected an integer, found " + v.dump());
   return v.get<int>();
 }
-int JsonObject::integer(const std::string& key, int fallback) { return has(key) ? integer(key) : (ignore(key), fallback); }
+int JsonObject::integer(const std::string& key, int fallback) {
+  return has(key) ? integer(key) : (ignore(key), fallback);
+}
 
 bool JsonObject::boolean(const std::string& key, bool fallback) {
   if (!has(key)) return fallback;
@@ -60,19 +65,24 @@ std::string JsonObject::string(const std::string& key, const std::string& fallba
 
 Vec3 JsonObject::vec3(const std::string& key) {
   const nlohmann::json& v = at(key);
-  if (!v.is_array() || v.size() != 3) fail(key, "expected an array of 3 numbers, found " + v.dump());
+  if (!v.is_array() || v.size() != 3)
+    fail(key, "expected an array of 3 numbers, found " + v.dump());
   Vec3 out;
   for (int k = 0; k < 3; ++k) {
-    if (!v[k].is_number() || !std::isfinite(v[k].get<double>())) fail(key, "expected an array of 3 numbers, found " + v.dump());
+    if (!v[k].is_number() || !std::isfinite(v[k].get<double>()))
+      fail(key, "expected an array of 3 numbers, found " + v.dump());
     out(k) = v[k].get<double>();
   }
   return out;
 }
-Vec3 JsonObject::vec3(const std::string& key, const Vec3& fallback) { return has(key) ? vec3(key) : fallback; }
+Vec3 JsonObject::vec3(const std::string& key, const Vec3& fallback) {
+  return has(key) ? vec3(key) : fallback;
+}
 
 Eigen::Vector3i JsonObject::int3(const std::string& key) {
   const nlohmann::json& v = at(key);
-  if (!v.is_array() || v.size() != 3) fail(key, "expected an array of 3 integers, found " + v.dump());
+  if (!v.is_array() || v.size() != 3)
+    fail(key, "expected an array of 3 integers, found " + v.dump());
   Eigen::Vector3i out;
   for (int k = 0; k < 3; ++k) {
     if (!v[k].is_number_integer()) fail(key, "expected an array of 3 integers, found " + v.dump());
@@ -104,7 +114,8 @@ std::vector<JsonObject> JsonObject::objects(const std::string& key) {
   std::vector<JsonObject> out;
   for (size_t k = 0; k < v.size(); ++k) {
     const std::string p = key_path(key) + "[" + std::to_string(k) + "]";
-    if (!v[k].is_object()) throw InputError(file_ + ": " + p + ": expected an object, found " + v[k].dump());
+    if (!v[k].is_object())
+      throw InputError(file_ + ": " + p + ": expected an object, found " + v[k].dump());
     out.emplace_back(v[k], p, file_);
   }
   return out;
@@ -112,7 +123,8 @@ std::vector<JsonObject> JsonObject::objects(const std::string& key) {
 
 void JsonObject::finish() const {
   for (auto it = j_.begin(); it != j_.end(); ++it)
-    if (!used_.count(it.key())) throw InputError(file_ + ": " + key_path(it.key()) + ": unknown key");
+    if (!used_.count(it.key()))
+      throw InputError(file_ + ": " + key_path(it.key()) + ": unknown key");
 }
 
 }  // namespace depthfem

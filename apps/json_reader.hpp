@@ -36,7 +36,8 @@ class JsonObject {
   /// A string key naming one of `names` (the first is the default when the key is absent);
   /// anything else fails with "unknown WHAT 'x' (expected a, b or c)".
   template <class E>
-  E choice(const std::string& key, const std::string& what, std::initializer_list<std::pair<const char*, E>> names) {
+  E choice(const std::string& key, const std::string& what,
+           std::initializer_list<std::pair<const char*, E>> names) {
     const std::string value = string(key, names.begin()->first);
     std::string expected;
     size_t k = 0;

@@ -42,7 +42,8 @@ int run(const std::vector<std::string>& args) {
       } catch (const std::exception&) {
         throw UsageError("--threads expects a positive integer, got '" + v + "'");
       }
-      if (options.threads < 1) throw UsageError("--threads expects a positive integer, got '" + v + "'");
+      if (options.threads < 1)
+        throw UsageError("--threads expects a positive integer, got '" + v + "'");
     } else if (args[i] == "--set") {
       overrides.push_back(parse_override(value()));
     } else if (args[i].rfind("--", 0) == 0) {
@@ -59,11 +60,12 @@ int run(const std::vector<std::string>& args) {
   const RunResult r = run_scene(scene, options, std::cout);
   print_timing(r.timers, r.seconds, std::cout);
   if (!r.success) {
-    std::cerr << "depthfem: error: " << r.message << " (" << r.steps.size() << " completed steps kept in "
-              << options.out << ")\n";
+    std::cerr << "depthfem: error: " << r.message << " (" << r.steps.size()
+              << " completed steps kept in " << options.out << ")\n";
     return 1;
   }
-  std::cout << "completed " << r.steps.size() << " steps in " << r.seconds << " s; results in " << options.out << "\n";
+  std::cout << "completed " << r.steps.size() << " steps in " << r.seconds << " s; results in "
+            << options.out << "\n";
   return 0;
 }
 
@@ -71,16 +73,20 @@ int info(const std::vector<std::string>& args) {
   using namespace depthfem;
   if (args.size() != 1) throw UsageError("info needs exactly one results file");
   const ResultsSummary s = read_results_summary(args[0]);
-  std::cout << args[0] << ": depthfem " << s.version << ", " << s.analysis << " analysis, " << s.threads << " threads\n"
-            << "  mesh: " << s.num_nodes << " nodes, " << s.num_tets << " tets, " << s.num_tris << " boundary triangles, "
-            << s.body_names.size() << " bodies:";
+  std::cout << args[0] << ": depthfem " << s.version << ", " << s.analysis << " analysis, "
+            << s.threads << " threads\n"
+            << "  mesh: " << s.num_nodes << " nodes, " << s.num_tets << " tets, " << s.num_tris
+            << " boundary triangles, " << s.body_names.size() << " bodies:";
   for (const std::string& b : s.body_names) std::cout << " " << b;
-  std::cout << "\n  steps: " << s.num_steps << ", last load/time " << s.last_load << ", Newton iterations "
-            << s.total_newton_iterations << ", linear iterations " << s.total_linear_iterations << "\n"
-            << "  status: " << s.status << (s.message.empty() ? "" : " (" + s.message + ")") << "\n";
+  std::cout << "\n  steps: " << s.num_steps << ", last load/time " << s.last_load
+            << ", Newton iterations " << s.total_newton_iterations << ", linear iterations "
+            << s.total_linear_iterations << "\n"
+            << "  status: " << s.status << (s.message.empty() ? "" : " (" + s.message + ")")
+            << "\n";
   if (!s.timing.empty()) {
     std::cout << "  timing:\n";
-    for (const auto& [phase, sec] : s.timing) std::printf("    %-36s %10.3f s\n", phase.c_str(), sec);
+    for (const auto& [phase, sec] : s.timing)
+      std::printf("    %-36s %10.3f s\n", phase.c_str(), sec);
   }
   return 0;
 }

@@ -8,11 +8,11 @@
 #include <cstdio>
 #include <memory>
 
+#include "contact/material_depth.hpp"
+#include "contact/node_to_surface_contact.hpp"
 #include "core/error.hpp"
 #include "core/lumped_mass.hpp"
 #include "core/results_file.hpp"
-#include "contact/material_depth.hpp"
-#include "contact/node_to_surface_contact.hpp"
 #include "integrators/arkode_stepper.hpp"
 #include "integrators/gravity.hpp"
 #include "integrators/implicit_stepper.hpp"
@@ -47,16 +47,19 @@ void print_timing(const PhaseTimers& timers, double total, std::ostream& out) {
   double grouped[3] = {0, 0, 0};
   const char* groups[3] = {"force/stiffness", "collision detection", "linear solve"};
   for (const auto& [name, sec] : timers.phases()) {
-    out << format("  %-36s %10.3f  %5.1f %%\n", name.c_str(), sec, total > 0 ? 100 * sec / total : 0.0);
+    out << format("  %-36s %10.3f  %5.1f %%\n", name.c_str(), sec,
+                  total > 0 ? 100 * sec / total : 0.0);
     for (int k = 0; k < 3; ++k)
       if (name.rfind(groups[k], 0) == 0) grouped[k] += sec;
   }
   double rest = total;
   for (int k = 0; k < 3; ++k) {
-    out << format("  = %-34s %10.3f  %5.1f %%\n", groups[k], grouped[k], total > 0 ? 100 * grouped[k] / total : 0.0);
+    out << format("  = %-34s %10.3f  %5.1f %%\n", groups[k], grouped[k],
+                  total > 0 ? 100 * grouped[k] / total : 0.0);
     rest -= grouped[k];
   }
-  out << format("  = %-34s %10.3f  %5.1f %%\n", "other", rest, total > 0 ? 100 * rest / total : 0.0);
+  out << format("  = %-34s %10.3f  %5.1f %%\n", "other", rest,
+                total > 0 ? 100 * rest / total : 0.0);
 }
 
 RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream& log) {
@@ -67,15 +70,18 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   RunResult result;
   const Mesh& mesh = scene.mesh;
   System system(mesh.num_nodes(), result.timers);
-  const Elasticity& elastic = system.add(std::make_unique<Elasticity>(mesh.X, mesh.tets, scene.groups));
+  const Elasticity& elastic =
+      system.add(std::make_unique<Elasticity>(mesh.X, mesh.tets, scene.groups));
   const VectorX mass = lumped_mass(mesh.X, mesh.tets, scene.tet_density);
   if (scene.gravity.norm() > 0) system.add(std::make_unique<Gravity>(mass, scene.gravity));
   // Time-dependent analyses: the implicit schemes carry inertia and damping as tethers.
   const bool time_dependent = scene.analysis != "static";
   const DynamicOptions& dyn_in = scene.dynamic_options;
   ImplicitTerms terms;
-  if (time_dependent && (dyn_in.integrator == Integrator::kImplicitEuler || dyn_in.integrator == Integrator::kNewmark)) {
-    if (scene.analysis == "dynamic") terms.inertia = &system.add(std::make_unique<NodalSpring>("inertia", mass));
+  if (time_dependent && (dyn_in.integrator == Integrator::kImplicitEuler ||
+                         dyn_in.integrator == Integrator::kNewmark)) {
+    if (scene.analysis == "dynamic")
+      terms.inertia = &system.add(std::make_unique<NodalSpring>("inertia", mass));
     if (scene.analysis == "quasistatic") {
       terms.damping.push_back(&system.add(std::make_unique<NodalSpring>(
           "viscosity", quasi_viscosity_stiffness(mesh.X, mesh.tets, scene.viscosity))));
@@ -85,8 +91,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
           &system.add(std::make_unique<NodalSpring>("mass damping", dyn_in.damping.mass * mass)));
     }
     if (dyn_in.damping.stiffness > 0) {
-      terms.damping.push_back(
-          &system.add(std::make_unique<StiffnessTether>("stiffness damping", elastic, dyn_in.damping.stiffness)));
+      terms.damping.push_back(&system.add(std::make_unique<StiffnessTether>(
+          "stiffness damping", elastic, dyn_in.damping.stiffness)));
     }
   }
   NodalSpring* viscosity = nullptr;
@@ -100,7 +106,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   if (scene.contact == ContactModel::kMaterialDepth) {
     PhaseTimers::Scope t(result.timers, "collision detection: material depth");
     depth = material_depth(mesh);
-    contact = &system.add(std::make_unique<MaterialDepthContact>(mesh, depth, scene.contact_options));
+    contact =
+        &system.add(std::make_unique<MaterialDepthContact>(mesh, depth, scene.contact_options));
   } else if (scene.contact == ContactModel::kNodeToSurface) {
     system.add(std::make_unique<NodeToSurfaceContact>(mesh, scene.contact_options.penalty));
   }
@@ -121,14 +128,16 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     for (const Constraint& c : scene.constraints) info.constraint_names.push_back(c.name);
     file = std::make_unique<ResultsFile>(options.out, mesh, depth, info);
   }
-  log << "scene " << scene.name << ": " << mesh.num_nodes() << " nodes, " << mesh.num_tets() << " tets, "
-      << mesh.bodies.size() << " bodies, " << threads << " threads, linear solver "
-      << to_string(opt.newton.linear.kind) << ", Newton tolerance " << format("%.3g", opt.newton.tolerance) << " N\n";
+  log << "scene " << scene.name << ": " << mesh.num_nodes() << " nodes, " << mesh.num_tets()
+      << " tets, " << mesh.bodies.size() << " bodies, " << threads << " threads, linear solver "
+      << to_string(opt.newton.linear.kind) << ", Newton tolerance "
+      << format("%.3g", opt.newton.tolerance) << " N\n";
 
   result.x = mesh.X;
   // One completed step (static increment or time step): summary, progress line, results file.
-  const auto record = [&](Index index, double load, const char* tag, const NewtonResult& newton, double seconds,
-                          const Points& x, const Points* v, const VectorX& gradient) {
+  const auto record = [&](Index index, double load, const char* tag, const NewtonResult& newton,
+                          double seconds, const Points& x, const Points* v,
+                          const VectorX& gradient) {
     StepSummary sum;
     sum.load = load;
     sum.newton_iterations = newton.iterations;
@@ -144,9 +153,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
       sum.contact_area = sum.contact_area.value_or(0) + obstacles->contact_area(x);
       sum.contact_force = sum.contact_force.value_or(0) + obstacles->total_force(x).norm();
     }
-    log << format("step %4d  %s %.4f%s  newton %2d  linear %5d  residual %.3e  energy % .6e  %.2f s\n", int(index),
-                  v ? "time" : "load", load, tag, sum.newton_iterations, sum.linear_iterations, sum.residual,
-                  sum.energy, seconds);
+    log << format(
+        "step %4d  %s %.4f%s  newton %2d  linear %5d  residual %.3e  energy % .6e  %.2f s\n",
+        int(index), v ? "time" : "load", load, tag, sum.newton_iterations, sum.linear_iterations,
+        sum.residual, sum.energy, seconds);
     if (file) {
       StepRecord rec;
       rec.index = index;
@@ -171,7 +181,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
       dyn.newton.tolerance = opt.newton.tolerance;
       Points v = scene.initial_velocity;
       const auto on_step = [&](const DynamicStep& s) {
-        NewtonResult newton = s.newton;  // report the potential energy, not the incremental potential
+        NewtonResult newton =
+            s.newton;  // report the potential energy, not the incremental potential
         newton.energy = s.potential_energy;
         record(s.index, s.time, "", newton, s.seconds, *s.x, s.v, s.gradient);
         StepSummary& sum = result.steps.back();
@@ -195,7 +206,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
       }
     } else {
       StaticSolver(system, constraints, viscosity, opt).run(result.x, [&](const StaticStep& s) {
-        record(s.index, s.load, s.settling ? " (settle)" : "", s.newton, s.seconds, *s.x, nullptr, s.gradient);
+        record(s.index, s.load, s.settling ? " (settle)" : "", s.newton, s.seconds, *s.x, nullptr,
+               s.gradient);
         if (options.observer) options.observer(result.steps.back(), *s.x);
       });
     }

@@ -15,8 +15,8 @@ namespace depthfem {
 struct StepSummary;
 
 struct RunOptions {
-  std::string out;   ///< results file (.h5); empty: no file
-  int threads = 0;   ///< 0: all cores
+  std::string out;  ///< results file (.h5); empty: no file
+  int threads = 0;  ///< 0: all cores
   /// Called after every completed step with its summary and positions (e.g. to sample a
   /// trajectory without writing a file).
   std::function<void(const StepSummary&, const Points& x)> observer;
@@ -28,7 +28,7 @@ struct StepSummary {
   int newton_iterations = 0, linear_iterations = 0;
   double energy = 0, residual = 0;
   Eigen::Matrix<double, Eigen::Dynamic, 3> reactions;  ///< per boundary condition [N]
-  std::optional<double> contact_area;   ///< [m^2], with contact or obstacles
+  std::optional<double> contact_area;                  ///< [m^2], with contact or obstacles
   std::optional<double> contact_force;  ///< [N]: obstacle force + sum over pairs of |pair force|
   double kinetic_energy = 0;            ///< dynamic runs: sum m |v|^2 / 2 [J]
   double potential_energy = 0;          ///< dynamic runs: E(x) without inertia and damping [J]

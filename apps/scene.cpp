@@ -31,11 +31,14 @@ TetMesh read_body_mesh(JsonObject m, const std::string& scene_dir) {
       mesh = box_mesh({m.vec3("lo"), m.vec3("hi"), m.int3("cells"), m.vec3("ratio", Vec3::Ones())});
     } else if (gen == "tube") {
       mesh = tube_mesh({m.number("inner_radius"), m.number("outer_radius"), m.number("length"),
-                        m.integer("cells_through_wall"), m.integer("cells_around"), m.integer("cells_along")});
+                        m.integer("cells_through_wall"), m.integer("cells_around"),
+                        m.integer("cells_along")});
     } else if (gen == "corner") {
-      mesh = corner_mesh({m.number("size"), m.number("core"), m.integer("core_cells"), m.number("ratio")});
+      mesh = corner_mesh(
+          {m.number("size"), m.number("core"), m.integer("core_cells"), m.number("ratio")});
     } else if (gen == "ball") {
-      mesh = ball_mesh({m.vec3("center", Vec3::Zero()), m.number("radius"), m.integer("cells_per_axis")});
+      mesh = ball_mesh(
+          {m.vec3("center", Vec3::Zero()), m.number("radius"), m.integer("cells_per_axis")});
     } else {
       m.fail("generator", "unknown generator '" + gen + "' (expected box, tube, ball or corner)");
     }
@@ -65,9 +68,11 @@ MaterialModel read_material(JsonObject m, Vec3& fiber_direction) {
   } else if (model == "fiber_veronda") {
     out = FiberReinforced<Veronda>{veronda(), m.number("fiber_alpha"), m.number("fiber_beta")};
   } else {
-    m.fail("model", "unknown material model '" + model +
-                        "' (expected neo_hookean, mooney_rivlin, veronda, nearly_incompressible_mooney_rivlin, "
-                        "fiber_mooney_rivlin or fiber_veronda)");
+    m.fail(
+        "model",
+        "unknown material model '" + model +
+            "' (expected neo_hookean, mooney_rivlin, veronda, nearly_incompressible_mooney_rivlin, "
+            "fiber_mooney_rivlin or fiber_veronda)");
   }
   if (material_uses_fiber(out)) fiber_direction = m.vec3("fiber_direction");
   try {
@@ -124,23 +129,25 @@ Constraint read_constraint(JsonObject c, const Mesh& mesh, size_t index) {
   } else if (type == "displaced") {
     out.kind = Displaced{c.vec3("displacement")};
   } else if (type == "rotated") {
-    out.kind = Rotated{c.vec3("axis"), c.vec3("center"), c.number("angle_deg") * std::numbers::pi / 180,
-                       c.vec3("translation", Vec3::Zero())};
+    out.kind =
+        Rotated{c.vec3("axis"), c.vec3("center"), c.number("angle_deg") * std::numbers::pi / 180,
+                c.vec3("translation", Vec3::Zero())};
   } else if (type == "plane") {
     out.kind = InPlane{c.vec3("normal"), c.number("offset", 0.0)};
   } else if (type == "line") {
     out.kind = OnLine{c.vec3("direction")};
   } else {
-    c.fail("type", "unknown boundary condition '" + type + "' (expected fixed, displaced, rotated, plane or line)");
+    c.fail("type", "unknown boundary condition '" + type +
+                       "' (expected fixed, displaced, rotated, plane or line)");
   }
   c.finish();
   return out;
 }
 
 void read_contact(JsonObject c, Scene& scene) {
-  scene.contact = c.choice<ContactModel>(
-      "model", "contact model",
-      {{"material_depth", ContactModel::kMaterialDepth}, {"node_to_surface", ContactModel::kNodeToSurface}});
+  scene.contact = c.choice<ContactModel>("model", "contact model",
+                                         {{"material_depth", ContactModel::kMaterialDepth},
+                                          {"node_to_surface", ContactModel::kNodeToSurface}});
   scene.contact_options.penalty = c.number("penalty");
   scene.contact_options.self_contact = c.boolean("self_contact", true);
   if (!(scene.contact_options.penalty > 0)) c.fail("penalty", "must be > 0");
@@ -153,7 +160,8 @@ Obstacle read_obstacle(JsonObject o, size_t index) {
   out.name = o.string("name", type + "_" + std::to_string(index));
   if (type == "plane") {
     out.shape = PlaneObstacle{o.vec3("point"), o.vec3("normal")};
-    if (!(std::get<PlaneObstacle>(out.shape).normal.norm() > 0)) o.fail("normal", "must be a non-zero vector");
+    if (!(std::get<PlaneObstacle>(out.shape).normal.norm() > 0))
+      o.fail("normal", "must be a non-zero vector");
   } else if (type == "sphere") {
     out.shape = SphereObstacle{o.vec3("center"), o.number("radius")};
     if (!(std::get<SphereObstacle>(out.shape).radius > 0)) o.fail("radius", "must be > 0");
@@ -178,10 +186,12 @@ void read_dynamic(JsonObject d, Scene& scene) {
   o.duration = d.number("duration");
   if (!(o.time_step > 0)) d.fail("time_step", "must be > 0");
   if (!(o.duration >= o.time_step)) d.fail("duration", "must be >= time_step");
-  const bool explicit_scheme = o.integrator == Integrator::kSymplecticEuler || o.integrator == Integrator::kArkode;
+  const bool explicit_scheme =
+      o.integrator == Integrator::kSymplecticEuler || o.integrator == Integrator::kArkode;
   if (scene.analysis == "quasistatic") {
     // Viscous flow without inertia: only implicit Euler, and the viscosity is what resists motion.
-    if (o.integrator != Integrator::kImplicitEuler) d.fail("integrator", "a quasistatic analysis uses implicit_euler");
+    if (o.integrator != Integrator::kImplicitEuler)
+      d.fail("integrator", "a quasistatic analysis uses implicit_euler");
     scene.viscosity = d.number("viscosity");
     if (!(scene.viscosity > 0)) d.fail("viscosity", "must be > 0");
   }
@@ -191,11 +201,13 @@ void read_dynamic(JsonObject d, Scene& scene) {
     o.damping.stiffness = c.number("stiffness", 0.0);
     if (!(o.damping.mass >= 0)) c.fail("mass", "must be >= 0");
     if (!(o.damping.stiffness >= 0)) c.fail("stiffness", "must be >= 0");
-    if (o.damping.stiffness > 0 && explicit_scheme) c.fail("stiffness", "needs an implicit integrator");
+    if (o.damping.stiffness > 0 && explicit_scheme)
+      c.fail("stiffness", "needs an implicit integrator");
     c.finish();
   }
   if (d.has("arkode")) {
-    if (o.integrator != Integrator::kArkode) d.fail("arkode", "only for \"integrator\": \"arkode\"");
+    if (o.integrator != Integrator::kArkode)
+      d.fail("arkode", "only for \"integrator\": \"arkode\"");
     JsonObject a = d.object("arkode");
     o.arkode.order = a.integer("order", o.arkode.order);
     o.arkode.relative_tolerance = a.number("relative_tolerance", o.arkode.relative_tolerance);
@@ -213,15 +225,17 @@ void read_dynamic(JsonObject d, Scene& scene) {
 void read_solver(JsonObject s, Scene& scene) {
   StaticOptions& o = scene.static_options;
   o.newton.linear.kind = s.choice<LinearSolverKind>("linear_solver", "linear solver",
-                                                     {{"direct", LinearSolverKind::kDirect},
-                                                      {"gmres", LinearSolverKind::kGmres},
-                                                      {"cg", LinearSolverKind::kCg}});
+                                                    {{"direct", LinearSolverKind::kDirect},
+                                                     {"gmres", LinearSolverKind::kGmres},
+                                                     {"cg", LinearSolverKind::kCg}});
   o.newton.linear.tolerance = s.number("linear_tolerance", o.newton.linear.tolerance);
-  o.newton.linear.max_iterations = s.integer("linear_max_iterations", o.newton.linear.max_iterations);
+  o.newton.linear.max_iterations =
+      s.integer("linear_max_iterations", o.newton.linear.max_iterations);
   o.newton.max_iterations = s.integer("max_newton_iterations", o.newton.max_iterations);
   o.newton.max_line_search = s.integer("max_line_search", o.newton.max_line_search);
   o.newton.line_search = s.choice<LineSearchRule>(
-      "line_search", "rule", {{"energy", LineSearchRule::kEnergy}, {"residual", LineSearchRule::kResidual}});
+      "line_search", "rule",
+      {{"energy", LineSearchRule::kEnergy}, {"residual", LineSearchRule::kResidual}});
   o.initial_increment = s.number("initial_increment", o.initial_increment);
   o.min_increment = s.number("min_increment", o.min_increment);
   o.max_increment = s.number("max_increment", o.max_increment);
@@ -231,9 +245,12 @@ void read_solver(JsonObject s, Scene& scene) {
   scene.tolerance = s.number("tolerance", scene.tolerance);
   if (!(o.min_increment > 0 && o.min_increment <= o.initial_increment && o.initial_increment <= 1 &&
         o.max_increment >= o.initial_increment)) {
-    s.fail("", "need 0 < min_increment <= initial_increment <= max_increment and initial_increment <= 1");
+    s.fail(
+        "",
+        "need 0 < min_increment <= initial_increment <= max_increment and initial_increment <= 1");
   }
-  if (!(o.newton.linear.tolerance > 0 && o.newton.linear.tolerance < 1)) s.fail("linear_tolerance", "must be in (0, 1)");
+  if (!(o.newton.linear.tolerance > 0 && o.newton.linear.tolerance < 1))
+    s.fail("linear_tolerance", "must be in (0, 1)");
   if (o.newton.max_iterations < 1) s.fail("max_newton_iterations", "must be >= 1");
   if (scene.quasi_viscosity < 0) s.fail("quasi_viscosity", "must be >= 0");
   if (!(scene.tolerance > 0)) s.fail("tolerance", "must be > 0");
@@ -249,10 +266,12 @@ void apply_override(json& root, const Override& o, const std::string& file) {
     const bool numeric = !seg.empty() && seg.find_first_not_of("0123456789") == std::string::npos;
     if (numeric && node->is_array()) {
       const size_t k = std::stoul(seg);
-      if (k >= node->size()) throw InputError(file + ": --set " + o.path + ": index " + seg + " out of range");
+      if (k >= node->size())
+        throw InputError(file + ": --set " + o.path + ": index " + seg + " out of range");
       node = &(*node)[k];
     } else {
-      if (!node->is_object() && !node->is_null()) throw InputError(file + ": --set " + o.path + ": '" + seg + "' is not inside an object");
+      if (!node->is_object() && !node->is_null())
+        throw InputError(file + ": --set " + o.path + ": '" + seg + "' is not inside an object");
       node = &(*node)[seg];
     }
   }
@@ -264,7 +283,8 @@ void apply_override(json& root, const Override& o, const std::string& file) {
 
 Override parse_override(const std::string& text) {
   const auto eq = text.find('=');
-  if (eq == std::string::npos || eq == 0) throw InputError("--set expects PATH=VALUE, got '" + text + "'");
+  if (eq == std::string::npos || eq == 0)
+    throw InputError("--set expects PATH=VALUE, got '" + text + "'");
   return {text.substr(0, eq), text.substr(eq + 1)};
 }
 
@@ -286,8 +306,10 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
   scene.name = r.string("name", std::filesystem::path(path).stem().string());
   r.ignore("description");
   scene.analysis = r.string("analysis", "static");
-  if (scene.analysis != "static" && scene.analysis != "dynamic" && scene.analysis != "quasistatic") {
-    r.fail("analysis", "unknown analysis '" + scene.analysis + "' (expected static, dynamic or quasistatic)");
+  if (scene.analysis != "static" && scene.analysis != "dynamic" &&
+      scene.analysis != "quasistatic") {
+    r.fail("analysis",
+           "unknown analysis '" + scene.analysis + "' (expected static, dynamic or quasistatic)");
   }
   scene.gravity = r.vec3("gravity", Vec3::Zero());
 
@@ -318,18 +340,22 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
     }
     const double rho = b.number("density", 1000.0);
     if (!(rho > 0)) b.fail("density", "must be > 0");
-    velocity.insert(velocity.end(), static_cast<size_t>(body.num_nodes), b.vec3("velocity", Vec3::Zero()));
+    velocity.insert(velocity.end(), static_cast<size_t>(body.num_nodes),
+                    b.vec3("velocity", Vec3::Zero()));
     b.finish();
     density.insert(density.end(), static_cast<size_t>(body.num_tets), rho);
   }
   if (scene.mesh.bodies.empty()) r.fail("bodies", "a scene needs at least one body");
   scene.initial_velocity.resize(scene.mesh.num_nodes(), 3);
-  for (Index i = 0; i < scene.mesh.num_nodes(); ++i) scene.initial_velocity.row(i) = velocity[i].transpose();
-  scene.tet_density = Eigen::Map<VectorX>(density.data(), static_cast<Eigen::Index>(density.size()));
+  for (Index i = 0; i < scene.mesh.num_nodes(); ++i)
+    scene.initial_velocity.row(i) = velocity[i].transpose();
+  scene.tet_density =
+      Eigen::Map<VectorX>(density.data(), static_cast<Eigen::Index>(density.size()));
 
   if (r.has("boundary")) {
     std::vector<JsonObject> list = r.objects("boundary");
-    for (size_t k = 0; k < list.size(); ++k) scene.constraints.push_back(read_constraint(list[k], scene.mesh, k));
+    for (size_t k = 0; k < list.size(); ++k)
+      scene.constraints.push_back(read_constraint(list[k], scene.mesh, k));
   }
   if (r.has("contact")) read_contact(r.object("contact"), scene);
   if (r.has("obstacles")) {

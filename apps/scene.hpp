@@ -9,8 +9,8 @@
 #include "contact/obstacle_contact.hpp"
 #include "core/mesh.hpp"
 #include "integrators/constraints.hpp"
-#include "integrators/elasticity.hpp"
 #include "integrators/dynamics.hpp"
+#include "integrators/elasticity.hpp"
 #include "integrators/static_solver.hpp"
 
 namespace depthfem {
@@ -25,20 +25,20 @@ struct Scene {
   std::string json_text;  ///< the (possibly overridden) scene as JSON, stored in the results
   std::string analysis = "static";
   Mesh mesh;
-  std::vector<ElasticGroup> groups;   ///< one per deformable body
-  std::vector<bool> rigid;            ///< per body: prescribed motion only, no unknowns
-  VectorX tet_density;                ///< [kg/m^3] per tet
-  Vec3 gravity = Vec3::Zero();        ///< [m/s^2]
+  std::vector<ElasticGroup> groups;  ///< one per deformable body
+  std::vector<bool> rigid;           ///< per body: prescribed motion only, no unknowns
+  VectorX tet_density;               ///< [kg/m^3] per tet
+  Vec3 gravity = Vec3::Zero();       ///< [m/s^2]
   std::vector<Constraint> constraints;
   ContactModel contact = ContactModel::kNone;
   ContactOptions contact_options;
   std::vector<Obstacle> obstacles;
-  double quasi_viscosity = 0;         ///< [Pa]; 0: off
-  double tolerance = 1e-9;            ///< relative Newton tolerance (see scene docs)
+  double quasi_viscosity = 0;  ///< [Pa]; 0: off
+  double tolerance = 1e-9;     ///< relative Newton tolerance (see scene docs)
   StaticOptions static_options;
-  DynamicOptions dynamic_options;     ///< analyses "dynamic" and "quasistatic"
-  double viscosity = 0;               ///< [Pa s] of a quasistatic analysis
-  Points initial_velocity;            ///< #nodes x 3 [m/s]
+  DynamicOptions dynamic_options;  ///< analyses "dynamic" and "quasistatic"
+  double viscosity = 0;            ///< [Pa s] of a quasistatic analysis
+  Points initial_velocity;         ///< #nodes x 3 [m/s]
 };
 
 /// A `--set path=value` override: path segments separated by '.', array indices as numbers,

@@ -115,26 +115,29 @@ void BM_Kernel(benchmark::State& state) {
   for (auto _ : state) {
     g.setZero();
     for (Index c = 0; c < b.num_colors(); ++c) {
-      tbb::parallel_for(tbb::blocked_range<Index>(b.color_begin[c], b.color_begin[c + 1], 1),
-                        [&](const tbb::blocked_range<Index>& chunks) {
-                          TetLocal local;
-                          for (Index k = chunks.begin(); k < chunks.end(); ++k)
-                            for (Index e = b.chunk_begin[k]; e < b.chunk_begin[k + 1]; ++e) {
-                              tet_local<kOrder>(kMaterial, L.Ds(e), L.D(e), L.volume(e), Vec3::UnitX(), local);
-                              for (int a = 0; a < 4; ++a) g.segment<3>(3 * L.node(e, a)) += local.gradient.col(a);
-                              if constexpr (kOrder == 2) {
-                                sink[e] = local.energy;
-                                benchmark::DoNotOptimize(local.hessian.data());  // all 144 entries are
-                                benchmark::ClobberMemory();                      // materialised
-                              }
-                            }
-                        });
+      tbb::parallel_for(
+          tbb::blocked_range<Index>(b.color_begin[c], b.color_begin[c + 1], 1),
+          [&](const tbb::blocked_range<Index>& chunks) {
+            TetLocal local;
+            for (Index k = chunks.begin(); k < chunks.end(); ++k)
+              for (Index e = b.chunk_begin[k]; e < b.chunk_begin[k + 1]; ++e) {
+                tet_local<kOrder>(kMaterial, L.Ds(e), L.D(e), L.volume(e), Vec3::UnitX(), local);
+                for (int a = 0; a < 4; ++a) g.segment<3>(3 * L.node(e, a)) += local.gradient.col(a);
+                if constexpr (kOrder == 2) {
+                  sink[e] = local.energy;
+                  benchmark::DoNotOptimize(local.hessian.data());  // all 144 entries are
+                  benchmark::ClobberMemory();                      // materialised
+                }
+              }
+          });
     }
     benchmark::DoNotOptimize(g.data());
     benchmark::DoNotOptimize(sink.data());
   }
-  state.counters["tets_per_s"] = benchmark::Counter(b.size(), benchmark::Counter::kIsIterationInvariantRate);
-  state.counters["per_core"] = benchmark::Counter(double(b.size()) / threads, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["tets_per_s"] =
+      benchmark::Counter(b.size(), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["per_core"] =
+      benchmark::Counter(double(b.size()) / threads, benchmark::Counter::kIsIterationInvariantRate);
 }
 
 // The production path: Elasticity::evaluate with scatter into the global CSR matrix.
@@ -156,16 +159,48 @@ void BM_Assembly(benchmark::State& state) {
     if (kHessian) H.set_zero();
     benchmark::DoNotOptimize(e.evaluate(s.x, &g, kHessian ? &H : nullptr));
   }
-  state.counters["tets_per_s"] = benchmark::Counter(all.size(), benchmark::Counter::kIsIterationInvariantRate);
-  state.counters["per_core"] = benchmark::Counter(double(all.size()) / threads, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["tets_per_s"] =
+      benchmark::Counter(all.size(), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["per_core"] = benchmark::Counter(double(all.size()) / threads,
+                                                  benchmark::Counter::kIsIterationInvariantRate);
 }
 
-BENCHMARK(BM_Kernel<2, SoA>)->Name("EnergyGradHess/SoA")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_Kernel<2, AoS>)->Name("EnergyGradHess/AoS")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_Kernel<1, SoA>)->Name("Gradient/SoA")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_Kernel<1, AoS>)->Name("Gradient/AoS")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_Assembly<true>)->Name("AssembleBSR/EnergyGradHess")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_Assembly<false>)->Name("AssembleBSR/EnergyGrad")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Kernel<2, SoA>)
+    ->Name("EnergyGradHess/SoA")
+    ->Arg(1)
+    ->Arg(2)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Kernel<2, AoS>)
+    ->Name("EnergyGradHess/AoS")
+    ->Arg(1)
+    ->Arg(2)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Kernel<1, SoA>)
+    ->Name("Gradient/SoA")
+    ->Arg(1)
+    ->Arg(2)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Kernel<1, AoS>)
+    ->Name("Gradient/AoS")
+    ->Arg(1)
+    ->Arg(2)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Assembly<true>)
+    ->Name("AssembleBSR/EnergyGradHess")
+    ->Arg(1)
+    ->Arg(2)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Assembly<false>)
+    ->Name("AssembleBSR/EnergyGrad")
+    ->Arg(1)
+    ->Arg(2)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace depthfem

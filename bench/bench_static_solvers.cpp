@@ -37,7 +37,8 @@ int main(int argc, char** argv) {
   const std::vector<Case> cases = {
       // Gravity is not ramped, so a smaller increment would only repeat the same solve: one try.
       {"cantilever_gravity",
-       {std::string("bodies.0.mesh.cells=") + (quick ? "[80,8,8]" : "[160,16,16]"), "solver.min_increment=1"}},
+       {std::string("bodies.0.mesh.cells=") + (quick ? "[80,8,8]" : "[160,16,16]"),
+        "solver.min_increment=1"}},
       {"twist_bar", {}},
   };
   std::ofstream csv(out);
@@ -66,9 +67,10 @@ int main(int argc, char** argv) {
         for (const auto& [name, sec] : r.timers.phases())
           if (name.rfind("force/stiffness", 0) == 0) force += sec;
         char line[512];
-        std::snprintf(line, sizeof line, "%s,%d,%s,%s,%d,%zu,%ld,%ld,%.3f,%.3f,%.3f,%.9g\n", c.scene.c_str(),
-                      3 * scene.mesh.num_nodes(), solver, rule, r.success ? 1 : 0, r.steps.size(), newton, linear,
-                      r.seconds, force, r.timers.seconds("linear solve"),
+        std::snprintf(line, sizeof line, "%s,%d,%s,%s,%d,%zu,%ld,%ld,%.3f,%.3f,%.3f,%.9g\n",
+                      c.scene.c_str(), 3 * scene.mesh.num_nodes(), solver, rule, r.success ? 1 : 0,
+                      r.steps.size(), newton, linear, r.seconds, force,
+                      r.timers.seconds("linear solve"),
                       r.steps.empty() ? 0.0 : r.steps.back().energy);
         csv << line << std::flush;
         std::cout << line << std::flush;

@@ -31,12 +31,13 @@ constexpr double kSampleInterval = 0.01;  // [s]
 struct Trajectory {
   std::vector<Points> tips;  // tip positions at t = k * kSampleInterval, k = 1, 2, ...
   double seconds = 0;
-  long steps = 0;            // time steps, or ARKODE's internal steps
-  long newton = 0;           // Newton iterations (implicit schemes)
+  long steps = 0;   // time steps, or ARKODE's internal steps
+  long newton = 0;  // Newton iterations (implicit schemes)
   std::string failure;
 };
 
-Trajectory run_case(const std::string& scene_path, std::vector<Override> o, const std::vector<std::string>& overrides) {
+Trajectory run_case(const std::string& scene_path, std::vector<Override> o,
+                    const std::vector<std::string>& overrides) {
   for (const std::string& s : overrides) o.push_back(parse_override(s));
   const Scene scene = load_scene(scene_path, o);
   std::vector<Index> tip;
@@ -69,7 +70,8 @@ Trajectory run_case(const std::string& scene_path, std::vector<Override> o, cons
 double max_distance(const Trajectory& a, const Trajectory& ref) {
   if (a.tips.size() != ref.tips.size()) return std::numeric_limits<double>::infinity();
   double e = 0;
-  for (size_t k = 0; k < a.tips.size(); ++k) e = std::max(e, (a.tips[k] - ref.tips[k]).rowwise().norm().maxCoeff());
+  for (size_t k = 0; k < a.tips.size(); ++k)
+    e = std::max(e, (a.tips[k] - ref.tips[k]).rowwise().norm().maxCoeff());
   return e;
 }
 
@@ -95,7 +97,8 @@ int main(int argc, char** argv) {
     } else if (a == "--set" && i + 1 < argc) {
       scene_overrides.push_back(parse_override(argv[++i]));
     } else {
-      std::cerr << "usage: bench_work_precision [--out FILE.csv] [--duration SECONDS] [--set PATH=VALUE ...]\n";
+      std::cerr << "usage: bench_work_precision [--out FILE.csv] [--duration SECONDS] [--set "
+                   "PATH=VALUE ...]\n";
       return 2;
     }
   }
@@ -124,13 +127,14 @@ int main(int argc, char** argv) {
     return 1;
   }
   csv << "integrator,setting,value,steps,newton_iterations,wall_s,max_tip_error_m,status\n";
-  const auto row = [&](const std::string& name, const std::string& setting, double value, const Trajectory& t) {
+  const auto row = [&](const std::string& name, const std::string& setting, double value,
+                       const Trajectory& t) {
     const double err = max_distance(t, ref);
-    csv << name << "," << setting << "," << value << "," << t.steps << "," << t.newton << "," << t.seconds << ","
-        << err << "," << (t.failure.empty() ? "ok" : "failed") << "\n";
+    csv << name << "," << setting << "," << value << "," << t.steps << "," << t.newton << ","
+        << t.seconds << "," << err << "," << (t.failure.empty() ? "ok" : "failed") << "\n";
     csv.flush();
-    std::printf("%-18s %-9s %-9g steps %7ld  newton %6ld  %8.3f s  error %.3e m %s\n", name.c_str(), setting.c_str(),
-                value, t.steps, t.newton, t.seconds, err, t.failure.c_str());
+    std::printf("%-18s %-9s %-9g steps %7ld  newton %6ld  %8.3f s  error %.3e m %s\n", name.c_str(),
+                setting.c_str(), value, t.steps, t.newton, t.seconds, err, t.failure.c_str());
   };
   row("reference_check", "rtol", 1e-10, run_case(scene, scene_overrides, arkode(5, 1e-10)));
   for (double h : {0.01, 0.005, 0.0025, 0.00125, 0.000625}) {
@@ -139,14 +143,18 @@ int main(int argc, char** argv) {
   }
   // Symplectic Euler from just below its stable step (rounded to divide the sample interval).
   const Scene base = load_scene(scene, scene_overrides);
-  const double limit = critical_time_step(base.mesh.X, base.mesh.tets, base.tet_density, base.groups);
+  const double limit =
+      critical_time_step(base.mesh.X, base.mesh.tets, base.tet_density, base.groups);
   const double h0 = kSampleInterval / std::ceil(kSampleInterval / (0.95 * limit));
   std::printf("symplectic Euler stable limit %.3g s, largest step run %.3g s\n", limit, h0);
-  for (double h = h0; h > h0 / 20; h /= 2) row("symplectic_euler", "h", h, run_case(scene, scene_overrides, stepped("symplectic_euler", h)));
+  for (double h = h0; h > h0 / 20; h /= 2)
+    row("symplectic_euler", "h", h,
+        run_case(scene, scene_overrides, stepped("symplectic_euler", h)));
   for (int order : {2, 4, 8})
     for (double rtol : {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8})
       if (order > 2 || rtol >= 1e-6)  // second order needs ~3x the steps per decade beyond that
-        row("arkode_order" + std::to_string(order), "rtol", rtol, run_case(scene, scene_overrides, arkode(order, rtol)));
+        row("arkode_order" + std::to_string(order), "rtol", rtol,
+            run_case(scene, scene_overrides, arkode(order, rtol)));
   std::cout << "wrote " << out << "\n";
   return 0;
 }

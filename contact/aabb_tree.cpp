@@ -20,7 +20,8 @@ AabbTree::AabbTree(const std::vector<Box3>& boxes, int leaf_size) : boxes_(boxes
 
 // Splits order_[begin, end) at the median of the centres along the axis of greatest extent.
 // Children are appended as a pair, so the tree depth stays about log2(n / leaf_size).
-void AabbTree::build(Index node, Index begin, Index end, int leaf_size, std::vector<Vec3>& centers) {
+void AabbTree::build(Index node, Index begin, Index end, int leaf_size,
+                     std::vector<Vec3>& centers) {
   if (end - begin <= leaf_size) {
     nodes_[node].first = begin;
     nodes_[node].count = end - begin;
@@ -43,7 +44,8 @@ void AabbTree::build(Index node, Index begin, Index end, int leaf_size, std::vec
 }
 
 void AabbTree::refit(const std::vector<Box3>& boxes) {
-  if (boxes.size() != boxes_.size()) throw std::logic_error("AabbTree::refit: primitive count changed");
+  if (boxes.size() != boxes_.size())
+    throw std::logic_error("AabbTree::refit: primitive count changed");
   boxes_ = boxes;
   for (Index i = num_nodes() - 1; i >= 0; --i) {
     Node& n = nodes_[i];

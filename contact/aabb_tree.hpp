@@ -36,7 +36,9 @@ class AabbTree {
   void nearest(const Vec3& p, double best_squared, Visit&& visit) const {
     walk([&](const Box3& b) { return b.squaredExteriorDistance(p) >= best_squared; },
          [&](Index primitive) { best_squared = visit(primitive, best_squared); },
-         [&](const Box3& l, const Box3& r) { return l.squaredExteriorDistance(p) < r.squaredExteriorDistance(p); });
+         [&](const Box3& l, const Box3& r) {
+           return l.squaredExteriorDistance(p) < r.squaredExteriorDistance(p);
+         });
   }
 
   Index size() const { return static_cast<Index>(boxes_.size()); }

@@ -25,7 +25,9 @@ ClipVertex tet_edge(int f1, int f2) {
   return v;
 }
 
-int lowest_bit(unsigned m) { return __builtin_ctz(m); }
+int lowest_bit(unsigned m) {
+  return __builtin_ctz(m);
+}
 
 // Keeps the part of the polygon where d >= 0 (d: signed value at each vertex); the new
 // vertices lie on `plane_face` (a tet face, or -1 for an obstacle's zero level). Returns the new

@@ -41,9 +41,13 @@ struct Dual2 {
 };
 
 template <int N>
-Dual2<N> operator+(Dual2<N> a, const Dual2<N>& b) { return a += b; }
+Dual2<N> operator+(Dual2<N> a, const Dual2<N>& b) {
+  return a += b;
+}
 template <int N>
-Dual2<N> operator-(Dual2<N> a, const Dual2<N>& b) { return a -= b; }
+Dual2<N> operator-(Dual2<N> a, const Dual2<N>& b) {
+  return a -= b;
+}
 template <int N>
 Dual2<N> operator-(Dual2<N> a) {
   a.v = -a.v;
@@ -67,7 +71,9 @@ Dual2<N> operator*(Dual2<N> a, double s) {
   return a;
 }
 template <int N>
-Dual2<N> operator*(double s, Dual2<N> a) { return a * s; }
+Dual2<N> operator*(double s, Dual2<N> a) {
+  return a * s;
+}
 template <int N>
 Dual2<N> operator+(Dual2<N> a, double s) {
   a.v += s;
@@ -84,7 +90,9 @@ Dual2<N> inverse(const Dual2<N>& b) {
   return r;
 }
 template <int N>
-Dual2<N> operator/(const Dual2<N>& a, const Dual2<N>& b) { return a * inverse(b); }
+Dual2<N> operator/(const Dual2<N>& a, const Dual2<N>& b) {
+  return a * inverse(b);
+}
 /// sqrt(a): value s, gradient g / (2 s), Hessian h / (2 s) - g g^T / (4 s^3).
 template <int N>
 Dual2<N> sqrt(const Dual2<N>& a) {
@@ -97,12 +105,20 @@ Dual2<N> sqrt(const Dual2<N>& a) {
 }
 
 /// Value of a plain double or of a Dual2.
-inline double value_of(double x) { return x; }
+inline double value_of(double x) {
+  return x;
+}
 /// 1 / x for plain doubles and dual numbers alike.
-inline double inverse_of(double x) { return 1.0 / x; }
+inline double inverse_of(double x) {
+  return 1.0 / x;
+}
 template <int N>
-Dual2<N> inverse_of(const Dual2<N>& x) { return inverse(x); }
+Dual2<N> inverse_of(const Dual2<N>& x) {
+  return inverse(x);
+}
 template <int N>
-double value_of(const Dual2<N>& x) { return x.v; }
+double value_of(const Dual2<N>& x) {
+  return x.v;
+}
 
 }  // namespace depthfem

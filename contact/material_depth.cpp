@@ -22,7 +22,8 @@ Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, cons
   const double vb = d5 * d2 - d1 * d6;
   if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + d2 / (d2 - d6) * ac;
   const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
+  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0)
+    return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
   const double denom = 1.0 / (va + vb + vc);
   return a + ab * (vb * denom) + ac * (vc * denom);
 }
@@ -32,20 +33,21 @@ VectorX material_depth(const Mesh& mesh) {
   for (const Body& body : mesh.bodies) {
     const TriIndices tris = mesh.tris.middleRows(body.first_tri, body.num_tris);
     const AabbTree tree(triangle_boxes(mesh.X, tris));
-    tbb::parallel_for(tbb::blocked_range<Index>(body.first_node, body.first_node + body.num_nodes, 256),
-                      [&](const tbb::blocked_range<Index>& r) {
-                        for (Index i = r.begin(); i < r.end(); ++i) {
-                          const Vec3 p = mesh.X.row(i);
-                          double best = std::numeric_limits<double>::infinity();
-                          tree.nearest(p, best, [&](Index f, double) {
-                            const Vec3 q = closest_point_on_triangle(p, mesh.X.row(tris(f, 0)), mesh.X.row(tris(f, 1)),
-                                                                     mesh.X.row(tris(f, 2)));
-                            best = std::min(best, (q - p).squaredNorm());
-                            return best;
-                          });
-                          depth(i) = std::sqrt(best);
-                        }
-                      });
+    tbb::parallel_for(
+        tbb::blocked_range<Index>(body.first_node, body.first_node + body.num_nodes, 256),
+        [&](const tbb::blocked_range<Index>& r) {
+          for (Index i = r.begin(); i < r.end(); ++i) {
+            const Vec3 p = mesh.X.row(i);
+            double best = std::numeric_limits<double>::infinity();
+            tree.nearest(p, best, [&](Index f, double) {
+              const Vec3 q = closest_point_on_triangle(
+                  p, mesh.X.row(tris(f, 0)), mesh.X.row(tris(f, 1)), mesh.X.row(tris(f, 2)));
+              best = std::min(best, (q - p).squaredNorm());
+              return best;
+            });
+            depth(i) = std::sqrt(best);
+          }
+        });
   }
   return depth;
 }

@@ -20,11 +20,16 @@ S node_energy(const V3<S>& p, const V3<S>& q0, const V3<S>& q1, const V3<S>& q2,
 }  // namespace
 
 NodeToSurfaceContact::NodeToSurfaceContact(const Mesh& mesh, double penalty)
-    : tets_(mesh.tets), tris_(mesh.tris), tet_body_(mesh.tet_body), tri_body_(mesh.tri_body), penalty_(penalty) {
+    : tets_(mesh.tets),
+      tris_(mesh.tris),
+      tet_body_(mesh.tet_body),
+      tri_body_(mesh.tri_body),
+      penalty_(penalty) {
   node_area_ = VectorX::Zero(mesh.num_nodes());
   node_body_ = IndexVector::Constant(mesh.num_nodes(), -1);
   for (Index f = 0; f < tris_.rows(); ++f) {
-    const Vec3 a = mesh.X.row(tris_(f, 0)), b = mesh.X.row(tris_(f, 1)), c = mesh.X.row(tris_(f, 2));
+    const Vec3 a = mesh.X.row(tris_(f, 0)), b = mesh.X.row(tris_(f, 1)),
+               c = mesh.X.row(tris_(f, 2));
     const double third = (b - a).cross(c - a).norm() / 6;
     for (int k = 0; k < 3; ++k) {
       node_area_(tris_(f, k)) += third;
@@ -62,7 +67,9 @@ void NodeToSurfaceContact::prepare(const Points& x) {
     double best = std::numeric_limits<double>::infinity();
     tri_tree_.nearest(p, best, [&](Index f, double) {
       if (tri_body_(f) != inside) return best;
-      const double d = (closest_point_on_triangle(p, x.row(tris_(f, 0)), x.row(tris_(f, 1)), x.row(tris_(f, 2))) - p)
+      const double d = (closest_point_on_triangle(p, x.row(tris_(f, 0)), x.row(tris_(f, 1)),
+                                                  x.row(tris_(f, 2))) -
+                        p)
                            .squaredNorm();
       if (d < best) best = d, nearest = f;
       return best;
@@ -89,7 +96,8 @@ void NodeToSurfaceContact::bind(const BlockSparseMatrix& hessian) {
   pattern_changed_ = false;
 }
 
-double NodeToSurfaceContact::evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const {
+double NodeToSurfaceContact::evaluate(const Points& x, VectorX* gradient,
+                                      BlockSparseMatrix* hessian) const {
   using D = Dual2<12>;
   double energy = 0;
   for (const auto& [i, f] : pairs_) {
@@ -97,16 +105,18 @@ double NodeToSurfaceContact::evaluate(const Points& x, VectorX* gradient, BlockS
     const double eps_area = penalty_ * node_area_(i);
     if (!gradient) {
       energy += node_energy(make_point<double>(x.row(v[0]), 0), make_point<double>(x.row(v[1]), 0),
-                            make_point<double>(x.row(v[2]), 0), make_point<double>(x.row(v[3]), 0), eps_area);
+                            make_point<double>(x.row(v[2]), 0), make_point<double>(x.row(v[3]), 0),
+                            eps_area);
       continue;
     }
-    const D W = node_energy(make_point<D>(x.row(v[0]), 0), make_point<D>(x.row(v[1]), 3), make_point<D>(x.row(v[2]), 6),
-                            make_point<D>(x.row(v[3]), 9), eps_area);
+    const D W = node_energy(make_point<D>(x.row(v[0]), 0), make_point<D>(x.row(v[1]), 3),
+                            make_point<D>(x.row(v[2]), 6), make_point<D>(x.row(v[3]), 9), eps_area);
     energy += W.v;
     for (int a = 0; a < 4; ++a) {
       gradient->segment<3>(3 * v[a]) += W.g.segment<3>(3 * a);
       if (!hessian) continue;
-      for (int b = 0; b < 4; ++b) hessian->add_block(hessian->block_index(v[a], v[b]), W.h.block<3, 3>(3 * a, 3 * b));
+      for (int b = 0; b < 4; ++b)
+        hessian->add_block(hessian->block_index(v[a], v[b]), W.h.block<3, 3>(3 * a, 3 * b));
     }
   }
   return energy;

@@ -34,7 +34,7 @@ class NodeToSurfaceContact final : public ForceModule {
   IndexVector tet_body_, tri_body_;
   std::vector<Index> surface_nodes_;  // nodes on some boundary triangle
   IndexVector node_body_;
-  VectorX node_area_;                 // boundary area share per node [m^2]
+  VectorX node_area_;  // boundary area share per node [m^2]
   double penalty_;
   AabbTree tet_tree_, tri_tree_;
   std::vector<std::pair<Index, Index>> pairs_;

@@ -34,15 +34,18 @@ S obstacle_depth(const Obstacle& o, double load, const V3<S>& q) {
 
 }  // namespace
 
-ObstacleContact::ObstacleContact(const Mesh& mesh, const std::vector<Index>& bodies, std::vector<Obstacle> obstacles)
+ObstacleContact::ObstacleContact(const Mesh& mesh, const std::vector<Index>& bodies,
+                                 std::vector<Obstacle> obstacles)
     : obstacles_(std::move(obstacles)) {
   for (const Obstacle& o : obstacles_) {
     if (!(o.penalty > 0)) throw InputError("obstacle '" + o.name + "': penalty must be > 0");
     std::visit(Overloaded{[&](const PlaneObstacle& p) {
-                            if (!(p.normal.norm() > 0)) throw InputError("obstacle '" + o.name + "': zero normal");
+                            if (!(p.normal.norm() > 0))
+                              throw InputError("obstacle '" + o.name + "': zero normal");
                           },
                           [&](const SphereObstacle& s) {
-                            if (!(s.radius > 0)) throw InputError("obstacle '" + o.name + "': radius must be > 0");
+                            if (!(s.radius > 0))
+                              throw InputError("obstacle '" + o.name + "': radius must be > 0");
                           }},
                o.shape);
   }
@@ -52,17 +55,21 @@ ObstacleContact::ObstacleContact(const Mesh& mesh, const std::vector<Index>& bod
     for (Index f = body.first_tri; f < body.first_tri + body.num_tris; ++f) rows.push_back(f);
   }
   tris_.resize(static_cast<Index>(rows.size()), 3);
-  for (size_t k = 0; k < rows.size(); ++k) tris_.row(static_cast<Index>(k)) = mesh.tris.row(rows[k]);
+  for (size_t k = 0; k < rows.size(); ++k)
+    tris_.row(static_cast<Index>(k)) = mesh.tris.row(rows[k]);
 }
 
-void ObstacleContact::begin_step(const Points&, double load) { load_ = load; }
+void ObstacleContact::begin_step(const Points&, double load) {
+  load_ = load;
+}
 
 void ObstacleContact::prepare(const Points& x) {
   active_.clear();
   for (Index o = 0; o < static_cast<Index>(obstacles_.size()); ++o)
     for (Index f = 0; f < tris_.rows(); ++f)
       for (int k = 0; k < 3; ++k)
-        if (obstacle_depth<double>(obstacles_[o], load_, make_point<double>(x.row(tris_(f, k)), 0)) > 0) {
+        if (obstacle_depth<double>(obstacles_[o], load_,
+                                   make_point<double>(x.row(tris_(f, k)), 0)) > 0) {
           active_.emplace_back(o, f);
           break;
         }
@@ -83,11 +90,13 @@ S ObstacleContact::triangle_energy(const Obstacle& o, const Corner& Q) const {
                               obstacle_depth<S>(o, load_, Q[2])};
   std::array<Vec3, 3> q;
   for (int k = 0; k < 3; ++k) q[k] = Vec3(value_of(Q[k].x), value_of(Q[k].y), value_of(Q[k].z));
-  const ClipPolygon poly = clip_triangle_by_field(q, {value_of(G[0]), value_of(G[1]), value_of(G[2])});
+  const ClipPolygon poly =
+      clip_triangle_by_field(q, {value_of(G[0]), value_of(G[1]), value_of(G[2])});
   return field_polygon_penalty(poly, Q, G, o.penalty, 0.0);
 }
 
-double ObstacleContact::evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const {
+double ObstacleContact::evaluate(const Points& x, VectorX* gradient,
+                                 BlockSparseMatrix* hessian) const {
   using D = Dual2<9>;
   double energy = 0;
   for (const auto& [o, f] : active_) {
@@ -105,7 +114,8 @@ double ObstacleContact::evaluate(const Points& x, VectorX* gradient, BlockSparse
       gradient->segment<3>(3 * tris_(f, a)) += W.g.segment<3>(3 * a);
       if (!hessian) continue;
       for (int b = 0; b < 3; ++b)
-        hessian->add_block(hessian->block_index(tris_(f, a), tris_(f, b)), W.h.block<3, 3>(3 * a, 3 * b));
+        hessian->add_block(hessian->block_index(tris_(f, a), tris_(f, b)),
+                           W.h.block<3, 3>(3 * a, 3 * b));
     }
   }
   return energy;
@@ -114,7 +124,8 @@ double ObstacleContact::evaluate(const Points& x, VectorX* gradient, BlockSparse
 Vec3 ObstacleContact::total_force(const Points& x) const {
   VectorX g = VectorX::Zero(3 * x.rows());
   evaluate(x, &g, nullptr);
-  return -Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(g.data(), x.rows(), 3)
+  return -Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(g.data(),
+                                                                                      x.rows(), 3)
               .colwise()
               .sum()
               .transpose();
@@ -130,7 +141,8 @@ double ObstacleContact::contact_area(const Points& x) const {
       G[k] = obstacle_depth<double>(obstacles_[o], load_, make_point<double>(q[k], 0));
     }
     const ClipPolygon p = clip_triangle_by_field(q, G);
-    for (int k = 1; k + 1 < p.size; ++k) area += 0.5 * (p.x[k] - p.x[0]).cross(p.x[k + 1] - p.x[0]).norm();
+    for (int k = 1; k + 1 < p.size; ++k)
+      area += 0.5 * (p.x[k] - p.x[0]).cross(p.x[k + 1] - p.x[0]).norm();
   }
   return area;
 }

@@ -35,7 +35,8 @@ struct Obstacle {
 class ObstacleContact final : public ForceModule {
  public:
   /// `bodies`: the bodies that touch the obstacles (their boundary triangles).
-  ObstacleContact(const Mesh& mesh, const std::vector<Index>& bodies, std::vector<Obstacle> obstacles);
+  ObstacleContact(const Mesh& mesh, const std::vector<Index>& bodies,
+                  std::vector<Obstacle> obstacles);
 
   std::string name() const override { return "obstacles"; }
   void begin_step(const Points& x, double load) override;

@@ -41,19 +41,22 @@ Index BlockSparseMatrix::block_index(Index i, Index j) const {
 }
 
 void BlockSparseMatrix::add_scaled(const BlockSparseMatrix& B, double s) {
-  if (B.col_ != col_ || B.row_begin_ != row_begin_) throw std::logic_error("add_scaled: the patterns differ");
+  if (B.col_ != col_ || B.row_begin_ != row_begin_)
+    throw std::logic_error("add_scaled: the patterns differ");
   for (size_t k = 0; k < values_.size(); ++k) values_[k] += s * B.values_[k];
 }
 
 void BlockSparseMatrix::multiply(const VectorX& x, VectorX& y) const {
   y.resize(3 * num_nodes());
-  tbb::parallel_for(tbb::blocked_range<Index>(0, num_nodes(), 256), [&](const tbb::blocked_range<Index>& r) {
-    for (Index i = r.begin(); i < r.end(); ++i) {
-      Vec3 s = Vec3::Zero();
-      for (Index k = row_begin_[i]; k < row_begin_[i + 1]; ++k) s += block(k) * x.segment<3>(3 * col_[k]);
-      y.segment<3>(3 * i) = s;
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<Index>(0, num_nodes(), 256),
+                    [&](const tbb::blocked_range<Index>& r) {
+                      for (Index i = r.begin(); i < r.end(); ++i) {
+                        Vec3 s = Vec3::Zero();
+                        for (Index k = row_begin_[i]; k < row_begin_[i + 1]; ++k)
+                          s += block(k) * x.segment<3>(3 * col_[k]);
+                        y.segment<3>(3 * i) = s;
+                      }
+                    });
 }
 
 VectorX BlockSparseMatrix::diagonal() const {
@@ -68,7 +71,8 @@ Eigen::SparseMatrix<double> BlockSparseMatrix::to_sparse() const {
   for (Index i = 0; i < num_nodes(); ++i)
     for (Index k = row_begin_[i]; k < row_begin_[i + 1]; ++k)
       for (int c = 0; c < 3; ++c)
-        for (int d = 0; d < 3; ++d) t.emplace_back(3 * i + c, 3 * col_[k] + d, values_[9 * k + 3 * c + d]);
+        for (int d = 0; d < 3; ++d)
+          t.emplace_back(3 * i + c, 3 * col_[k] + d, values_[9 * k + 3 * c + d]);
   Eigen::SparseMatrix<double> A(3 * num_nodes(), 3 * num_nodes());
   A.setFromTriplets(t.begin(), t.end());
   return A;

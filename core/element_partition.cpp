@@ -27,7 +27,8 @@ std::vector<std::uint32_t> morton_codes(const Points& p) {
   for (Index i = 0; i < p.rows(); ++i) {
     std::uint32_t c = 0;
     for (int k = 0; k < 3; ++k) {
-      const auto q = static_cast<std::uint32_t>(std::clamp((p(i, k) - lo(k)) * scale(k), 0.0, 1023.0));
+      const auto q =
+          static_cast<std::uint32_t>(std::clamp((p(i, k) - lo(k)) * scale(k), 0.0, 1023.0));
       c |= spread_bits(q) << k;
     }
     code[i] = c;
@@ -44,7 +45,8 @@ ElementPartition partition_elements(
   const std::vector<std::uint32_t> code = morton_codes(centroids);
   std::vector<Index> sorted(static_cast<size_t>(n));
   std::iota(sorted.begin(), sorted.end(), 0);
-  std::stable_sort(sorted.begin(), sorted.end(), [&](Index a, Index b) { return code[a] < code[b]; });
+  std::stable_sort(sorted.begin(), sorted.end(),
+                   [&](Index a, Index b) { return code[a] < code[b]; });
 
   // Greedy chunk coloring: a chunk takes the smallest color not yet used at any of its nodes.
   const Index num_chunks = (n + chunk_size - 1) / chunk_size;
@@ -58,7 +60,8 @@ ElementPartition partition_elements(
     for (Index p = begin; p < end; ++p)
       for (Eigen::Index a = 0; a < elements.cols(); ++a)
         for (Index c : node_colors[elements(sorted[p], a)]) taken[c] = 1;
-    const Index color = static_cast<Index>(std::find(taken.begin(), taken.end(), 0) - taken.begin());
+    const Index color =
+        static_cast<Index>(std::find(taken.begin(), taken.end(), 0) - taken.begin());
     chunk_color[k] = color;
     num_colors = std::max(num_colors, color + 1);
     for (Index p = begin; p < end; ++p)

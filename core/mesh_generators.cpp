@@ -18,7 +18,8 @@ namespace {
 // coordinates (i may wrap for periodic directions) to a node index.
 TetIndices kuhn_tets(int nx, int ny, int nz, const std::function<Index(int, int, int)>& node) {
   // The 6 monotone lattice paths from corner (0,0,0) to (1,1,1), one per axis permutation.
-  static constexpr int kPerm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  static constexpr int kPerm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2},
+                                      {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
   TetIndices tets(6 * nx * ny * nz, 4);
   Index t = 0;
   for (int k = 0; k < nz; ++k)
@@ -57,7 +58,8 @@ TetMesh box_mesh(const BoxParams& p) {
   for (int k = 0; k <= n(2); ++k)
     for (int j = 0; j <= n(1); ++j)
       for (int i = 0; i <= n(0); ++i) {
-        const Vec3 s(fraction(i, n(0), p.ratio(0)), fraction(j, n(1), p.ratio(1)), fraction(k, n(2), p.ratio(2)));
+        const Vec3 s(fraction(i, n(0), p.ratio(0)), fraction(j, n(1), p.ratio(1)),
+                     fraction(k, n(2), p.ratio(2)));
         m.X.row(id(i, j, k)) = (p.lo.array() + s.array() * (p.hi - p.lo).array()).transpose();
       }
   m.tets = kuhn_tets(n(0), n(1), n(2), id);
@@ -81,7 +83,8 @@ TetMesh tube_mesh(const TubeParams& p) {
       for (int ir = 0; ir <= nr; ++ir) {
         const double r = p.inner_radius + (p.outer_radius - p.inner_radius) * ir / nr;
         const double th = 2 * std::numbers::pi * it / nt;
-        m.X.row(id(ir, it, iz)) = Vec3(r * std::cos(th), r * std::sin(th), p.length * iz / nz).transpose();
+        m.X.row(id(ir, it, iz)) =
+            Vec3(r * std::cos(th), r * std::sin(th), p.length * iz / nz).transpose();
       }
   m.tets = kuhn_tets(nr, nt, nz, id);
   validate_and_orient(m);
@@ -112,13 +115,15 @@ TetMesh corner_mesh(const CornerParams& p) {
   require(p.core_cells >= 1, "corner: core_cells must be >= 1");
   require(p.ratio > 1, "corner: ratio must be > 1");
   const int m = p.core_cells;
-  const int shells = std::max(1, static_cast<int>(std::ceil(std::log(p.size / p.core) / std::log(p.ratio) - 1e-9)));
+  const int shells = std::max(
+      1, static_cast<int>(std::ceil(std::log(p.size / p.core) / std::log(p.ratio) - 1e-9)));
   const double q = std::pow(p.size / p.core, 1.0 / shells);
   // Nodes shared by the blocks are computed by the same expressions, so they coincide exactly.
   std::map<std::array<double, 3>, Index> index;
   std::vector<Vec3> points;
   const auto node = [&](const Vec3& x) {
-    const auto [it, inserted] = index.try_emplace({x(0), x(1), x(2)}, static_cast<Index>(points.size()));
+    const auto [it, inserted] =
+        index.try_emplace({x(0), x(1), x(2)}, static_cast<Index>(points.size()));
     if (inserted) points.push_back(x);
     return it->second;
   };
@@ -142,7 +147,8 @@ TetMesh corner_mesh(const CornerParams& p) {
   }
   TetMesh mesh;
   mesh.X.resize(static_cast<Index>(points.size()), 3);
-  for (size_t i = 0; i < points.size(); ++i) mesh.X.row(static_cast<Index>(i)) = points[i].transpose();
+  for (size_t i = 0; i < points.size(); ++i)
+    mesh.X.row(static_cast<Index>(i)) = points[i].transpose();
   Index total = 0;
   for (const TetIndices& t : blocks) total += static_cast<Index>(t.rows());
   mesh.tets.resize(total, 4);

@@ -11,8 +11,8 @@ namespace depthfem {
 /// is r times as long as the one before it (node k of n at lo + (hi - lo) (r^k - 1) / (r^n - 1)):
 /// r > 1 refines towards lo with constant relative resolution; r = 1 is uniform.
 struct BoxParams {
-  Vec3 lo = Vec3::Zero();     ///< [m]
-  Vec3 hi = Vec3::Ones();     ///< [m]
+  Vec3 lo = Vec3::Zero();  ///< [m]
+  Vec3 hi = Vec3::Ones();  ///< [m]
   Eigen::Vector3i cells{1, 1, 1};
   Vec3 ratio = Vec3::Ones();
 };
@@ -23,7 +23,7 @@ struct TubeParams {
   double outer_radius = 1.0;  ///< [m]
   double length = 1.0;        ///< [m]
   int cells_through_wall = 1;
-  int cells_around = 16;      ///< >= 3
+  int cells_around = 16;  ///< >= 3
   int cells_along = 4;
 };
 

@@ -6,7 +6,8 @@ std::vector<Index> nodes_in_box(const Points& X, const Vec3& lo, const Vec3& hi,
   std::vector<Index> out;
   for (Index i = 0; i < X.rows(); ++i) {
     const Vec3 p = X.row(i);
-    if ((p.array() >= lo.array() - tol).all() && (p.array() <= hi.array() + tol).all()) out.push_back(i);
+    if ((p.array() >= lo.array() - tol).all() && (p.array() <= hi.array() + tol).all())
+      out.push_back(i);
   }
   return out;
 }

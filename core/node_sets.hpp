@@ -11,7 +11,8 @@ namespace depthfem {
 std::vector<Index> nodes_in_box(const Points& X, const Vec3& lo, const Vec3& hi, double tol = 1e-9);
 
 /// Nodes within `tol` of the plane n . X = offset (n need not be unit; it is normalised).
-std::vector<Index> nodes_on_plane(const Points& X, const Vec3& normal, double offset, double tol = 1e-9);
+std::vector<Index> nodes_on_plane(const Points& X, const Vec3& normal, double offset,
+                                  double tol = 1e-9);
 
 /// All nodes of body `body`.
 std::vector<Index> nodes_of_body(const Mesh& mesh, Index body);

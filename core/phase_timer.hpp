@@ -23,7 +23,8 @@ class PhaseTimers {
     Scope(PhaseTimers& timers, std::string phase)
         : timers_(timers), phase_(std::move(phase)), start_(std::chrono::steady_clock::now()) {}
     ~Scope() {
-      timers_.add(phase_, std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());
+      timers_.add(phase_,
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());
     }
     Scope(const Scope&) = delete;
     Scope& operator=(const Scope&) = delete;

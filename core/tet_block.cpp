@@ -19,7 +19,8 @@ TetBlock make_tet_block(const Points& X, const TetIndices& tets, std::span<const
   Points centroids(n, 3);
   for (Index e = 0; e < n; ++e) {
     local.row(e) = tets.row(which[e]);
-    centroids.row(e) = 0.25 * (X.row(local(e, 0)) + X.row(local(e, 1)) + X.row(local(e, 2)) + X.row(local(e, 3)));
+    centroids.row(e) =
+        0.25 * (X.row(local(e, 0)) + X.row(local(e, 1)) + X.row(local(e, 2)) + X.row(local(e, 3)));
   }
   const ElementPartition part = partition_elements(local, static_cast<Index>(X.rows()), centroids);
 
@@ -37,7 +38,8 @@ TetBlock make_tet_block(const Points& X, const TetIndices& tets, std::span<const
     b.nodes.row(r) = local.row(e);
     b.tet(r) = t;
     Mat3 Dm;
-    for (int a = 0; a < 3; ++a) Dm.col(a) = (X.row(local(e, a + 1)) - X.row(local(e, 0))).transpose();
+    for (int a = 0; a < 3; ++a)
+      Dm.col(a) = (X.row(local(e, a + 1)) - X.row(local(e, 0))).transpose();
     const double det = Dm.determinant();
     if (!(det > 0)) {
       throw InputError("tet " + std::to_string(t) + " has non-positive rest volume " +

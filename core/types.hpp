@@ -26,7 +26,8 @@ using IndexVector = Eigen::Matrix<Index, Eigen::Dynamic, 1>;
 
 /// Interleaved dof vector (3 * node + component) viewed as #nodes x 3 positions, copied to SoA.
 inline Points as_points(const VectorX& v) {
-  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(v.data(), v.size() / 3, 3);
+  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
+      v.data(), v.size() / 3, 3);
 }
 /// #nodes x 3 positions as an interleaved dof vector (3 * node + component).
 inline VectorX as_dofs(const Points& x) {

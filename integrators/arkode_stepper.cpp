@@ -35,7 +35,9 @@ struct RhsData {
   std::string error;
 };
 
-Eigen::Map<VectorX> view(N_Vector v) { return {N_VGetArrayPointer(v), N_VGetLength_Serial(v)}; }
+Eigen::Map<VectorX> view(N_Vector v) {
+  return {N_VGetArrayPointer(v), N_VGetLength_Serial(v)};
+}
 
 // y = (x, v) interleaved per block; ydot = (P v, P M^-1 (-g - alpha M v)).
 int rhs(realtype t, N_Vector y_vec, N_Vector ydot_vec, void* user) {
@@ -54,7 +56,8 @@ int rhs(realtype t, N_Vector y_vec, N_Vector ydot_vec, void* user) {
   VectorX velocity = y.tail(n);
   VectorX accel(n);
   for (Index i = 0; i < d.nodes; ++i)
-    accel.segment<3>(3 * i) = -g.segment<3>(3 * i) / d.mass(i) - d.alpha * velocity.segment<3>(3 * i);
+    accel.segment<3>(3 * i) =
+        -g.segment<3>(3 * i) / d.mass(i) - d.alpha * velocity.segment<3>(3 * i);
   d.constraints.project(velocity);
   d.constraints.project(accel);
   ydot.head(n) = velocity;
@@ -62,22 +65,25 @@ int rhs(realtype t, N_Vector y_vec, N_Vector ydot_vec, void* user) {
   return 0;
 }
 
-void capture_error(int /*code*/, const char* /*module*/, const char* function, char* message, void* user) {
+void capture_error(int /*code*/, const char* /*module*/, const char* function, char* message,
+                   void* user) {
   auto& d = *static_cast<RhsData*>(user);
   if (d.error.empty()) d.error = std::string(function) + ": " + message;
 }
 
 void check(int flag, const char* call) {
-  if (flag < 0) throw SolveError(std::string("arkode: ") + call + " failed with flag " + std::to_string(flag));
+  if (flag < 0)
+    throw SolveError(std::string("arkode: ") + call + " failed with flag " + std::to_string(flag));
 }
 
 }  // namespace
 
-ArkodeStepper::ArkodeStepper(System& system, const Constraints& constraints, VectorX mass, DynamicOptions options)
+ArkodeStepper::ArkodeStepper(System& system, const Constraints& constraints, VectorX mass,
+                             DynamicOptions options)
     : system_(system), constraints_(constraints), mass_(std::move(mass)), options_(options) {
   if (!has_erk_table(options_.arkode.order)) {
-    throw InputError("arkode: no explicit Runge-Kutta table of order " + std::to_string(options_.arkode.order) +
-                     " (expected 2, 3, 4, 5, 6 or 8)");
+    throw InputError("arkode: no explicit Runge-Kutta table of order " +
+                     std::to_string(options_.arkode.order) + " (expected 2, 3, 4, 5, 6 or 8)");
   }
   if (options_.damping.stiffness != 0) {
     throw InputError("arkode: stiffness-proportional damping needs an implicit integrator");
@@ -90,7 +96,8 @@ void ArkodeStepper::run(Points& x, Points& v, const StepCallback& on_step) {
   SUNContext raw_ctx = nullptr;
   check(SUNContext_Create(nullptr, &raw_ctx), "SUNContext_Create");
   const std::unique_ptr<std::remove_pointer_t<SUNContext>, ContextDeleter> ctx(raw_ctx);
-  const std::unique_ptr<std::remove_pointer_t<N_Vector>, VectorDeleter> y(N_VNew_Serial(2 * n, ctx.get()));
+  const std::unique_ptr<std::remove_pointer_t<N_Vector>, VectorDeleter> y(
+      N_VNew_Serial(2 * n, ctx.get()));
   view(y.get()) << as_dofs(x), as_dofs(v);
 
   RhsData data{system_, constraints_, mass_, options_.damping.mass, options_.duration, nodes, {}};
@@ -99,7 +106,8 @@ void ArkodeStepper::run(Points& x, Points& v, const StepCallback& on_step) {
   const ArkodeOptions& o = options_.arkode;
   check(ERKStepSetUserData(mem.get(), &data), "ERKStepSetUserData");
   check(ERKStepSetErrHandlerFn(mem.get(), capture_error, &data), "ERKStepSetErrHandlerFn");
-  check(ERKStepSStolerances(mem.get(), o.relative_tolerance, o.absolute_tolerance), "ERKStepSStolerances");
+  check(ERKStepSStolerances(mem.get(), o.relative_tolerance, o.absolute_tolerance),
+        "ERKStepSStolerances");
   check(ERKStepSetOrder(mem.get(), o.order), "ERKStepSetOrder");
   check(ERKStepSetMaxNumSteps(mem.get(), o.max_steps), "ERKStepSetMaxNumSteps");
   check(ERKStepSetStopTime(mem.get(), options_.duration), "ERKStepSetStopTime");
@@ -114,15 +122,16 @@ void ArkodeStepper::run(Points& x, Points& v, const StepCallback& on_step) {
     const int flag = ERKStepEvolve(mem.get(), target, y.get(), &t, ARK_NORMAL);
     if (flag < 0) {
       char* name = ERKStepGetReturnFlagName(flag);
-      const std::string message = "arkode: " + std::string(name) + " at t = " + std::to_string(t) + " s" +
-                                  (data.error.empty() ? "" : ": " + data.error);
+      const std::string message = "arkode: " + std::string(name) + " at t = " + std::to_string(t) +
+                                  " s" + (data.error.empty() ? "" : ": " + data.error);
       std::free(name);
       throw SolveError(message);
     }
     const Points before = x;
     x = as_points(view(y.get()).head(n));
     constraints_.impose(t / options_.duration, x);
-    // Free directions take ARKODE's velocity, constrained ones the prescribed motion over the interval.
+    // Free directions take ARKODE's velocity, constrained ones the prescribed motion over the
+    // interval.
     VectorX velocity = view(y.get()).tail(n);
     VectorX prescribed = as_dofs(x - before) / h;
     constraints_.project(velocity);
@@ -131,7 +140,8 @@ void ArkodeStepper::run(Points& x, Points& v, const StepCallback& on_step) {
     v = as_points(velocity + prescribed - free_part);
     long internal = 0;
     ERKStepGetNumSteps(mem.get(), &internal);
-    NewtonResult explicit_step;  // no solve; iterations = internal Runge-Kutta steps of the interval
+    NewtonResult
+        explicit_step;  // no solve; iterations = internal Runge-Kutta steps of the interval
     explicit_step.converged = true;
     explicit_step.iterations = static_cast<int>(internal - internal_before);
     explicit_step.residuals.push_back(0.0);

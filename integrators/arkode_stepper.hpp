@@ -14,7 +14,8 @@ namespace depthfem {
 class ArkodeStepper {
  public:
   /// Throws InputError for an order without a default table or stiffness-proportional damping.
-  ArkodeStepper(System& system, const Constraints& constraints, VectorX mass, DynamicOptions options);
+  ArkodeStepper(System& system, const Constraints& constraints, VectorX mass,
+                DynamicOptions options);
 
   /// Advances (x, v) to the end time, reporting every options.time_step of simulated time (the
   /// internal steps are ARKODE's). Throws SolveError with ARKODE's flag and message on failure

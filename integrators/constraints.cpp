@@ -17,13 +17,15 @@ struct Overloaded : F... {
 // A unit vector, or InputError naming the condition.
 Vec3 unit(const Vec3& v, const std::string& name, const char* what) {
   const double n = v.norm();
-  if (!(n > 0) || !v.allFinite()) throw InputError("boundary condition '" + name + "': " + what + " must be a non-zero vector");
+  if (!(n > 0) || !v.allFinite())
+    throw InputError("boundary condition '" + name + "': " + what + " must be a non-zero vector");
   return v / n;
 }
 
 }  // namespace
 
-Constraints::Constraints(const Points& X, std::vector<Constraint> list) : X_(X), list_(std::move(list)) {
+Constraints::Constraints(const Points& X, std::vector<Constraint> list)
+    : X_(X), list_(std::move(list)) {
   const Index n = static_cast<Index>(X.rows());
   slot_.assign(static_cast<size_t>(n), -1);
   // Per node: constrained directions (columns) with their offsets per unit load.
@@ -35,11 +37,13 @@ Constraints::Constraints(const Points& X, std::vector<Constraint> list) : X_(X),
     if (c.nodes.empty()) throw InputError("boundary condition '" + c.name + "' selects no nodes");
     for (Index i : c.nodes) {
       if (i < 0 || i >= n) {
-        throw InputError("boundary condition '" + c.name + "': node " + std::to_string(i) + " outside 0.." +
-                         std::to_string(n - 1));
+        throw InputError("boundary condition '" + c.name + "': node " + std::to_string(i) +
+                         " outside 0.." + std::to_string(n - 1));
       }
       touched[i] = 1;
-      std::visit(Overloaded{[&](const InPlane& p) { planes[i].emplace_back(unit(p.normal, c.name, "normal"), p.offset); },
+      std::visit(Overloaded{[&](const InPlane& p) {
+                              planes[i].emplace_back(unit(p.normal, c.name, "normal"), p.offset);
+                            },
                             [&](const OnLine& l) {
                               const Vec3 a = unit(l.direction, c.name, "direction");
                               const Vec3 b = a.unitOrthogonal(), d = a.cross(b);
@@ -71,7 +75,8 @@ Constraints::Constraints(const Points& X, std::vector<Constraint> list) : X_(X),
           s.shift_per_load += (missing / len) * b;
           s.C += b * b.transpose();
         } else if (std::abs(missing) > 1e-12 * (1 + std::abs(offset))) {
-          throw InputError("boundary conditions on node " + std::to_string(i) + " contradict each other");
+          throw InputError("boundary conditions on node " + std::to_string(i) +
+                           " contradict each other");
         }
       }
     }
@@ -106,24 +111,27 @@ void Constraints::project(VectorX& v) const {
 void Constraints::project(BlockSparseMatrix& H) const {
   if (states_.empty()) return;
   const Mat3 I = Mat3::Identity();
-  const auto P = [&](Index node) -> Mat3 { return slot_[node] < 0 ? I : Mat3(I - states_[slot_[node]].C); };
-  tbb::parallel_for(tbb::blocked_range<Index>(0, H.num_nodes(), 256), [&](const tbb::blocked_range<Index>& r) {
-    for (Index i = r.begin(); i < r.end(); ++i) {
-      const bool row_constrained = slot_[i] >= 0;
-      for (Index k = H.row_begin(i); k < H.row_begin(i + 1); ++k) {
-        const Index j = H.block_col(k);
-        if (!row_constrained && slot_[j] < 0) continue;
-        auto B = H.block(k);
-        B = P(i) * Mat3(B) * P(j);
-        if (i == j) B += states_[slot_[i]].C;
-      }
-    }
-  });
+  const auto P = [&](Index node) -> Mat3 {
+    return slot_[node] < 0 ? I : Mat3(I - states_[slot_[node]].C);
+  };
+  tbb::parallel_for(tbb::blocked_range<Index>(0, H.num_nodes(), 256),
+                    [&](const tbb::blocked_range<Index>& r) {
+                      for (Index i = r.begin(); i < r.end(); ++i) {
+                        const bool row_constrained = slot_[i] >= 0;
+                        for (Index k = H.row_begin(i); k < H.row_begin(i + 1); ++k) {
+                          const Index j = H.block_col(k);
+                          if (!row_constrained && slot_[j] < 0) continue;
+                          auto B = H.block(k);
+                          B = P(i) * Mat3(B) * P(j);
+                          if (i == j) B += states_[slot_[i]].C;
+                        }
+                      }
+                    });
 }
 
 Eigen::Matrix<double, Eigen::Dynamic, 3> Constraints::reactions(const VectorX& g) const {
-  Eigen::Matrix<double, Eigen::Dynamic, 3> R = Eigen::Matrix<double, Eigen::Dynamic, 3>::Zero(
-      static_cast<Eigen::Index>(list_.size()), 3);
+  Eigen::Matrix<double, Eigen::Dynamic, 3> R =
+      Eigen::Matrix<double, Eigen::Dynamic, 3>::Zero(static_cast<Eigen::Index>(list_.size()), 3);
   for (size_t k = 0; k < list_.size(); ++k)
     for (Index i : list_[k].nodes) {
       const NodeState& s = states_[slot_[i]];

@@ -68,9 +68,9 @@ class Constraints {
  private:
   struct NodeState {
     Index node;
-    Mat3 C;                  // projector onto the constrained directions
-    Index full = -1;         // index of the fully prescribing condition, or -1
-    Vec3 shift_per_load;     // plane offsets: target = X + lambda shift_per_load
+    Mat3 C;               // projector onto the constrained directions
+    Index full = -1;      // index of the fully prescribing condition, or -1
+    Vec3 shift_per_load;  // plane offsets: target = X + lambda shift_per_load
   };
   Vec3 target(const NodeState& s, double lambda) const;
 

@@ -14,8 +14,8 @@ namespace depthfem {
 
 /// Time integration scheme.
 enum class Integrator {
-  kImplicitEuler,    ///< first order, implicit, dissipative
-  kNewmark,          ///< Newmark average acceleration (trapezoidal): second order, implicit, no dissipation
+  kImplicitEuler,  ///< first order, implicit, dissipative
+  kNewmark,  ///< Newmark average acceleration (trapezoidal): second order, implicit, no dissipation
   kSymplecticEuler,  ///< first order, explicit, conditionally stable
   kArkode,           ///< SUNDIALS ERKStep: adaptive explicit Runge-Kutta of a chosen order
 };
@@ -27,11 +27,13 @@ struct RayleighDamping {
 };
 
 /// Whether ERKStep has a default explicit Runge-Kutta table of this order (2, 3, 4, 5, 6 or 8).
-constexpr bool has_erk_table(int order) { return order >= 2 && order <= 8 && order != 7; }
+constexpr bool has_erk_table(int order) {
+  return order >= 2 && order <= 8 && order != 7;
+}
 
 /// ERKStep settings (integrator kArkode).
 struct ArkodeOptions {
-  int order = 4;                     ///< one with has_erk_table(order)
+  int order = 4;  ///< one with has_erk_table(order)
   double relative_tolerance = 1e-6;
   double absolute_tolerance = 1e-9;  ///< [m] on positions, [m/s] on velocities
   long max_steps = 100000;           ///< internal steps per output interval
@@ -65,8 +67,8 @@ Index time_step_count(const DynamicOptions& options);
 
 /// Completes a step record for (x, v) at time t (gradient of the system at x, the potential
 /// energy without the integrator's `tethers`, wall time since `start`) and passes it to on_step.
-void report_time_step(System& system, std::span<Tether* const> tethers, Index index, double t, NewtonResult newton,
-                      const Points& x, const Points& v, std::chrono::steady_clock::time_point start,
-                      const StepCallback& on_step);
+void report_time_step(System& system, std::span<Tether* const> tethers, Index index, double t,
+                      NewtonResult newton, const Points& x, const Points& v,
+                      std::chrono::steady_clock::time_point start, const StepCallback& on_step);
 
 }  // namespace depthfem

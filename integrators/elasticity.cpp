@@ -34,7 +34,8 @@ double run_rows(const M& m, const TetBlock& b, const Index* scatter, const Point
   TetLocal local;
   double energy = 0;
   for (Index e = begin; e < end; ++e) {
-    tet_local<kOrder>(m, edge_matrix(x, b.nodes, e), b.dm_inv(e), b.volume(e), fiber_of(b, e), local);
+    tet_local<kOrder>(m, edge_matrix(x, b.nodes, e), b.dm_inv(e), b.volume(e), fiber_of(b, e),
+                      local);
     energy += local.energy;
     if constexpr (kOrder >= 1) {
       for (int a = 0; a < 4; ++a) g->segment<3>(3 * b.nodes(e, a)) += local.gradient.col(a);
@@ -120,7 +121,8 @@ double Elasticity::evaluate(const Points& x, VectorX* gradient, BlockSparseMatri
   if (hessian && !gradient) throw std::logic_error("elasticity: a Hessian needs a gradient too");
   double total = 0;
   for (const Group& grp : groups_) {
-    if (hessian && grp.scatter.empty()) throw std::logic_error("elasticity: bind() the Hessian first");
+    if (hessian && grp.scatter.empty())
+      throw std::logic_error("elasticity: bind() the Hessian first");
     total += std::visit(
         [&](const auto& m) {
           if (hessian) return run_group<2>(m, grp.block, grp.scatter.data(), x, gradient, hessian);

@@ -3,8 +3,8 @@
 
 #include <vector>
 
-#include "core/tet_block.hpp"
 #include "core/force_module.hpp"
+#include "core/tet_block.hpp"
 #include "materials/material.hpp"
 
 namespace depthfem {

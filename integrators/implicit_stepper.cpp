@@ -6,11 +6,15 @@
 
 namespace depthfem {
 
-ImplicitStepper::ImplicitStepper(System& system, const Constraints& constraints, ImplicitTerms terms,
-                                 DynamicOptions options)
-    : system_(system), constraints_(constraints), terms_(std::move(terms)), options_(options),
+ImplicitStepper::ImplicitStepper(System& system, const Constraints& constraints,
+                                 ImplicitTerms terms, DynamicOptions options)
+    : system_(system),
+      constraints_(constraints),
+      terms_(std::move(terms)),
+      options_(options),
       newton_(system, constraints, options.newton) {
-  if (options_.integrator != Integrator::kImplicitEuler && options_.integrator != Integrator::kNewmark)
+  if (options_.integrator != Integrator::kImplicitEuler &&
+      options_.integrator != Integrator::kNewmark)
     throw std::logic_error("ImplicitStepper: not an implicit integrator");
   if (options_.integrator == Integrator::kNewmark && !terms_.inertia)
     throw std::logic_error("ImplicitStepper: Newmark needs inertia");
@@ -28,7 +32,8 @@ Points ImplicitStepper::initial_acceleration(const Points& x, const Points& v) {
   system_.begin_step(x, 0.0);
   system_.prepare(x);
   VectorX g;  // hessian(), not gradient(): it binds the pattern a stiffness tether assembles into
-  if (!std::isfinite(system_.hessian(x, g))) throw SolveError("the initial configuration is illegal");
+  if (!std::isfinite(system_.hessian(x, g)))
+    throw SolveError("the initial configuration is illegal");
   constraints_.project(g);
   Points a = -as_points(g);
   a.array().colwise() /= terms_.inertia->stiffness().array();
@@ -55,7 +60,8 @@ void ImplicitStepper::run(Points& x, Points& v, const StepCallback& on_step) {
     system_.begin_step(x, t / options_.duration);
     NewtonResult r = newton_.solve(next);
     if (!r.converged) {
-      throw SolveError("time step " + std::to_string(n) + " (t = " + std::to_string(t) + " s) failed: " + r.failure);
+      throw SolveError("time step " + std::to_string(n) + " (t = " + std::to_string(t) +
+                       " s) failed: " + r.failure);
     }
     if (newmark) {
       const Points a_next = (4.0 / (h * h)) * (next - predicted);

@@ -9,9 +9,12 @@ namespace depthfem {
 
 std::string to_string(LinearSolverKind kind) {
   switch (kind) {
-    case LinearSolverKind::kGmres: return "gmres";
-    case LinearSolverKind::kCg: return "cg";
-    case LinearSolverKind::kDirect: return "direct";
+    case LinearSolverKind::kGmres:
+      return "gmres";
+    case LinearSolverKind::kCg:
+      return "cg";
+    case LinearSolverKind::kDirect:
+      return "direct";
   }
   return "?";
 }
@@ -36,16 +39,20 @@ LinearSolveStats LinearSolver::solve(const BlockSparseMatrix& A, const VectorX& 
   x.setZero(b.size());
   if (b.norm() == 0) return {0, 0.0, true};
   switch (options_.kind) {
-    case LinearSolverKind::kGmres: return gmres(A, b, x);
-    case LinearSolverKind::kCg: return cg(A, b, x);
-    case LinearSolverKind::kDirect: return direct(A, b, x);
+    case LinearSolverKind::kGmres:
+      return gmres(A, b, x);
+    case LinearSolverKind::kCg:
+      return cg(A, b, x);
+    case LinearSolverKind::kDirect:
+      return direct(A, b, x);
   }
   return {};
 }
 
 // Restarted GMRES with right preconditioning M^-1 = diag(A)^-1: minimises the true residual
 // |b - A x| over x0 + M^-1 K_m(A M^-1, r0); Arnoldi by modified Gram-Schmidt, Givens rotations.
-LinearSolveStats LinearSolver::gmres(const BlockSparseMatrix& A, const VectorX& b, VectorX& x) const {
+LinearSolveStats LinearSolver::gmres(const BlockSparseMatrix& A, const VectorX& b,
+                                     VectorX& x) const {
   const VectorX Minv = inverse_diagonal(A);
   const double bnorm = b.norm(), target = options_.tolerance * bnorm;
   const int m = options_.restart;

@@ -11,9 +11,9 @@ namespace depthfem {
 
 /// Which method solves A x = b.
 enum class LinearSolverKind {
-  kGmres,     ///< restarted GMRES, Jacobi (diagonal) preconditioning: the paper's choice
-  kCg,        ///< conjugate gradients, Jacobi preconditioning
-  kDirect,    ///< sparse Cholesky (CHOLMOD supernodal LL^T; simplicial LDL^T if indefinite)
+  kGmres,   ///< restarted GMRES, Jacobi (diagonal) preconditioning: the paper's choice
+  kCg,      ///< conjugate gradients, Jacobi preconditioning
+  kDirect,  ///< sparse Cholesky (CHOLMOD supernodal LL^T; simplicial LDL^T if indefinite)
 };
 
 /// The scene-file name of a solver kind.
@@ -31,9 +31,9 @@ struct LinearSolverOptions {
 
 /// What a solve did.
 struct LinearSolveStats {
-  int iterations = 0;             ///< iterative: matrix products; direct: 1
-  double relative_residual = 0;   ///< |b - A x| / |b|
-  bool reached_tolerance = false; ///< iterative: tolerance met; direct: factorisation succeeded
+  int iterations = 0;              ///< iterative: matrix products; direct: 1
+  double relative_residual = 0;    ///< |b - A x| / |b|
+  bool reached_tolerance = false;  ///< iterative: tolerance met; direct: factorisation succeeded
 };
 
 /// Solves A x = b with the chosen method. The direct method reuses its symbolic analysis while

@@ -48,8 +48,9 @@ NewtonResult NewtonSolver::solve(Points& x) {
       return result;
     }
     if (result.iterations == options_.max_iterations) {
-      result.failure = "no convergence in " + std::to_string(options_.max_iterations) + " Newton iterations (residual " +
-                       std::to_string(residual) + " N, tolerance " + std::to_string(options_.tolerance) + " N)";
+      result.failure = "no convergence in " + std::to_string(options_.max_iterations) +
+                       " Newton iterations (residual " + std::to_string(residual) +
+                       " N, tolerance " + std::to_string(options_.tolerance) + " N)";
       return result;
     }
     BlockSparseMatrix& H = system_.matrix();
@@ -67,7 +68,8 @@ NewtonResult NewtonSolver::solve(Points& x) {
     // Line search along the Newton direction; if it is not a descent direction (an indefinite
     // Hessian) or finds no acceptable step, along the Jacobi-scaled gradient instead.
     const bool energy_rule = options_.line_search == LineSearchRule::kEnergy;
-    bool accepted = (!energy_rule || g.dot(dx) < 0) && line_search(x, as_points(dx), energy, residual);
+    bool accepted =
+        (!energy_rule || g.dot(dx) < 0) && line_search(x, as_points(dx), energy, residual);
     if (!accepted) {
       const VectorX d = H.diagonal().cwiseAbs().cwiseMax(1e-300);
       dx = -g.cwiseQuotient(d);
@@ -76,7 +78,8 @@ NewtonResult NewtonSolver::solve(Points& x) {
     ++result.iterations;
     if (!accepted) {
       result.failure = std::string("line search found no legal step that lowers the ") +
-                       (energy_rule ? "energy" : "residual") + " (residual " + std::to_string(residual) + " N)";
+                       (energy_rule ? "energy" : "residual") + " (residual " +
+                       std::to_string(residual) + " N)";
       return result;
     }
     energy = system_.hessian(x, g);

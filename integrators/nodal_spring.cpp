@@ -14,9 +14,11 @@ void NodalSpring::bind(const BlockSparseMatrix& hessian) {
 double NodalSpring::evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const {
   const Points d = x - anchor_;
   if (gradient)
-    for (Index i = 0; i < x.rows(); ++i) gradient->segment<3>(3 * i) += scale_ * k_(i) * d.row(i).transpose();
+    for (Index i = 0; i < x.rows(); ++i)
+      gradient->segment<3>(3 * i) += scale_ * k_(i) * d.row(i).transpose();
   if (hessian)
-    for (Index i = 0; i < x.rows(); ++i) hessian->block(diagonal_[i]).diagonal().array() += scale_ * k_(i);
+    for (Index i = 0; i < x.rows(); ++i)
+      hessian->block(diagonal_[i]).diagonal().array() += scale_ * k_(i);
   return 0.5 * scale_ * (k_.array() * d.rowwise().squaredNorm().array()).sum();
 }
 

@@ -25,7 +25,8 @@ class Tether : public ForceModule {
 /// s = 1 / h^2 and a = the predicted position it is the inertia term of implicit Euler.
 class NodalSpring final : public Tether {
  public:
-  NodalSpring(std::string name, VectorX stiffness) : name_(std::move(name)), k_(std::move(stiffness)) {}
+  NodalSpring(std::string name, VectorX stiffness)
+      : name_(std::move(name)), k_(std::move(stiffness)) {}
   std::string name() const override { return name_; }
   void add_couplings(SparsityBuilder&) const override {}
   void bind(const BlockSparseMatrix& hessian) override;

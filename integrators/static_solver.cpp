@@ -65,14 +65,16 @@ void StaticSolver::run(Points& x, const std::function<void(const StaticStep&)>& 
   while (load < 1.0) {
     const double target = std::min(1.0, load + increment);
     if (attempt(target, false)) {
-      if (++successes >= 2) increment = std::min(options_.max_increment, increment * options_.growth);
+      if (++successes >= 2)
+        increment = std::min(options_.max_increment, increment * options_.growth);
       continue;
     }
     successes = 0;
     increment *= 0.5;
     if (increment < options_.min_increment) {
-      throw SolveError("load increment fell below min_increment " + std::to_string(options_.min_increment) +
-                       " at load factor " + std::to_string(load) + ": " + last_failure);
+      throw SolveError("load increment fell below min_increment " +
+                       std::to_string(options_.min_increment) + " at load factor " +
+                       std::to_string(load) + ": " + last_failure);
     }
   }
   if (!viscosity_) return;

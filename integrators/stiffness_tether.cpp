@@ -15,8 +15,10 @@ void StiffnessTether::bind(const BlockSparseMatrix& hessian) {
   stale_ = true;
 }
 
-double StiffnessTether::evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const {
-  if (!bound_ || start_.rows() == 0) throw std::logic_error(name_ + ": call bind() and begin_step() first");
+double StiffnessTether::evaluate(const Points& x, VectorX* gradient,
+                                 BlockSparseMatrix* hessian) const {
+  if (!bound_ || start_.rows() == 0)
+    throw std::logic_error(name_ + ": call bind() and begin_step() first");
   if (stale_) {
     K_.set_zero();
     VectorX g = VectorX::Zero(3 * start_.rows());

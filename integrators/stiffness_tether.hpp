@@ -22,10 +22,11 @@ class StiffnessTether final : public Tether {
  private:
   std::string name_;
   const ForceModule& elastic_;
-  double beta_;                   // [s]
-  Points start_;                  // configuration K is taken at
-  mutable BlockSparseMatrix K_;   // elastic Hessian, pattern of the global one; assembled on first use
-  mutable bool stale_ = true;     // (timed with the force evaluation, not with begin_step)
+  double beta_;   // [s]
+  Points start_;  // configuration K is taken at
+  mutable BlockSparseMatrix
+      K_;                      // elastic Hessian, pattern of the global one; assembled on first use
+  mutable bool stale_ = true;  // (timed with the force evaluation, not with begin_step)
   bool bound_ = false;
 };
 

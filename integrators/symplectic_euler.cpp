@@ -14,11 +14,13 @@ double critical_time_step(const Points& X, const TetIndices& tets, const VectorX
   for (const ElasticGroup& group : groups) {
     const LinearizedModuli mod = material_moduli(group.material);
     for (Index t : group.tets) {
-      const Vec3 p[4] = {X.row(tets(t, 0)), X.row(tets(t, 1)), X.row(tets(t, 2)), X.row(tets(t, 3))};
+      const Vec3 p[4] = {X.row(tets(t, 0)), X.row(tets(t, 1)), X.row(tets(t, 2)),
+                         X.row(tets(t, 3))};
       double largest_face = 0;
       for (int f = 0; f < 4; ++f) {
         const Vec3& a = p[(f + 1) % 4];
-        largest_face = std::max(largest_face, 0.5 * (p[(f + 2) % 4] - a).cross(p[(f + 3) % 4] - a).norm());
+        largest_face =
+            std::max(largest_face, 0.5 * (p[(f + 2) % 4] - a).cross(p[(f + 3) % 4] - a).norm());
       }
       const double length = 3 * signed_volume(p[0], p[1], p[2], p[3]) / largest_face;
       const double speed = std::sqrt((mod.lambda + 2 * mod.mu) / tet_density(t));
@@ -28,8 +30,8 @@ double critical_time_step(const Points& X, const TetIndices& tets, const VectorX
   return h;
 }
 
-SymplecticEuler::SymplecticEuler(System& system, const Constraints& constraints, VectorX mass, DynamicOptions options,
-                                 double critical_step)
+SymplecticEuler::SymplecticEuler(System& system, const Constraints& constraints, VectorX mass,
+                                 DynamicOptions options, double critical_step)
     : system_(system), constraints_(constraints), mass_(std::move(mass)), options_(options) {
   if (options_.time_step > critical_step) {
     throw InputError("symplectic_euler: time step " + std::to_string(options_.time_step) +
@@ -37,7 +39,8 @@ SymplecticEuler::SymplecticEuler(System& system, const Constraints& constraints,
                      " s of this mesh (smallest element altitude / wave speed)");
   }
   if (options_.damping.stiffness != 0) {
-    throw InputError("symplectic_euler: stiffness-proportional damping needs an implicit integrator");
+    throw InputError(
+        "symplectic_euler: stiffness-proportional damping needs an implicit integrator");
   }
 }
 
@@ -55,11 +58,12 @@ void SymplecticEuler::run(Points& x, Points& v, const StepCallback& on_step) {
                        " s): an element inverted (the explicit step is too large for this motion)");
     }
     v *= 1.0 - h * options_.damping.mass;
-    for (Index i = 0; i < x.rows(); ++i) v.row(i) -= (h / mass_(i)) * g.segment<3>(3 * i).transpose();
+    for (Index i = 0; i < x.rows(); ++i)
+      v.row(i) -= (h / mass_(i)) * g.segment<3>(3 * i).transpose();
     const Points before = x;
     x += h * v;
     constraints_.impose(t / options_.duration, x);
-    v = (x - before) / h;  // constrained nodes move as prescribed
+    v = (x - before) / h;        // constrained nodes move as prescribed
     NewtonResult explicit_step;  // no solve: converged by construction, energy at the start
     explicit_step.converged = true;
     explicit_step.energy = energy;

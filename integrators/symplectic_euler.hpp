@@ -7,8 +7,8 @@
 #include <functional>
 
 #include "integrators/constraints.hpp"
-#include "integrators/elasticity.hpp"
 #include "integrators/dynamics.hpp"
+#include "integrators/elasticity.hpp"
 #include "integrators/system.hpp"
 
 namespace depthfem {
@@ -24,8 +24,8 @@ class SymplecticEuler {
  public:
   /// Throws InputError when options.time_step exceeds `critical_step` or stiffness-proportional
   /// damping is requested.
-  SymplecticEuler(System& system, const Constraints& constraints, VectorX mass, DynamicOptions options,
-                  double critical_step);
+  SymplecticEuler(System& system, const Constraints& constraints, VectorX mass,
+                  DynamicOptions options, double critical_step);
 
   /// Advances (x, v) to the end time; calls on_step after every step (newton fields left empty).
   void run(Points& x, Points& v, const StepCallback& on_step);

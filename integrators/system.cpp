@@ -29,7 +29,9 @@ double System::evaluate(const Points& x, VectorX* g, BlockSparseMatrix* H) {
   return total;
 }
 
-double System::energy(const Points& x) { return evaluate(x, nullptr, nullptr); }
+double System::energy(const Points& x) {
+  return evaluate(x, nullptr, nullptr);
+}
 
 double System::gradient(const Points& x, VectorX& g) {
   g.setZero(3 * num_nodes_);

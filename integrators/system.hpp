@@ -4,8 +4,8 @@
 #include <memory>
 #include <vector>
 
-#include "core/phase_timer.hpp"
 #include "core/force_module.hpp"
+#include "core/phase_timer.hpp"
 
 namespace depthfem {
 

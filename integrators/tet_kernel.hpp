@@ -39,7 +39,8 @@ inline void tet_local(const M& m, const Mat3& Ds, const Mat3& D, double volume, 
     Mat9 U;
     for (int b = 0; b < 3; ++b)
       for (int d = 0; d < 3; ++d)
-        U.col(3 * b + d) = D(b, 0) * s.dPdF.col(d) + D(b, 1) * s.dPdF.col(3 + d) + D(b, 2) * s.dPdF.col(6 + d);
+        U.col(3 * b + d) =
+            D(b, 0) * s.dPdF.col(d) + D(b, 1) * s.dPdF.col(3 + d) + D(b, 2) * s.dPdF.col(6 + d);
     // K = A U is symmetric, so K = U^T A^T: column (3b + d) = sum_l D(b, l) U^T.col(3l + d).
     // Written straight into the node 1..3 part of the 12x12 (contiguous column segments).
     const Mat9 Ut = U.transpose();
@@ -50,12 +51,13 @@ inline void tet_local(const M& m, const Mat3& Ds, const Mat3& D, double volume, 
             volume * (D(b, 0) * Ut.col(d) + D(b, 1) * Ut.col(3 + d) + D(b, 2) * Ut.col(6 + d));
     // Node 0 rows/columns: minus the sums of the blocks of nodes 1..3.
     for (int d = 0; d < 3; ++d) {
-      H.col(d).template segment<9>(3) = -(H.col(3 + d).template segment<9>(3) + H.col(6 + d).template segment<9>(3) +
-                                          H.col(9 + d).template segment<9>(3));
+      H.col(d).template segment<9>(3) =
+          -(H.col(3 + d).template segment<9>(3) + H.col(6 + d).template segment<9>(3) +
+            H.col(9 + d).template segment<9>(3));
       H.row(d).template segment<9>(3) = H.col(d).template segment<9>(3).transpose();
     }
-    H.template topLeftCorner<3, 3>() =
-        -(H.template block<3, 3>(3, 0) + H.template block<3, 3>(6, 0) + H.template block<3, 3>(9, 0));
+    H.template topLeftCorner<3, 3>() = -(
+        H.template block<3, 3>(3, 0) + H.template block<3, 3>(6, 0) + H.template block<3, 3>(9, 0));
   }
 }
 

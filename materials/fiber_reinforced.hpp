@@ -8,10 +8,10 @@
 
 namespace depthfem {
 
-/// psi = psi_base + alpha (exp(beta (I4 - 1)) - 1) - alpha beta (I4 - 1), I4 = lambda_f^2 = f^T C f.
-/// The paper's form alpha exp(beta (lambda_f^2 - 1)) - alpha beta lambda_f^2, shifted by a constant
-/// so that psi(I) = 0; dpsi/dI4 = alpha beta (exp(beta (I4-1)) - 1) vanishes at I4 = 1, so the
-/// reference state stays stress-free. The fiber direction f is given per element.
+/// psi = psi_base + alpha (exp(beta (I4 - 1)) - 1) - alpha beta (I4 - 1), I4 = lambda_f^2 = f^T C
+/// f. The paper's form alpha exp(beta (lambda_f^2 - 1)) - alpha beta lambda_f^2, shifted by a
+/// constant so that psi(I) = 0; dpsi/dI4 = alpha beta (exp(beta (I4-1)) - 1) vanishes at I4 = 1, so
+/// the reference state stays stress-free. The fiber direction f is given per element.
 template <class Base>
 struct FiberReinforced {
   using BaseMaterial = Base;

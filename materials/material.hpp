@@ -15,8 +15,9 @@ namespace depthfem {
 
 /// One of the supported models. Kernels dispatch on it once per element group (std::visit), so
 /// each model gets its own fully inlined kernel and no per-element branch.
-using MaterialModel = std::variant<NeoHookean, MooneyRivlin, Veronda, NearlyIncompressibleMooneyRivlin,
-                                   FiberReinforced<MooneyRivlin>, FiberReinforced<Veronda>>;
+using MaterialModel =
+    std::variant<NeoHookean, MooneyRivlin, Veronda, NearlyIncompressibleMooneyRivlin,
+                 FiberReinforced<MooneyRivlin>, FiberReinforced<Veronda>>;
 
 /// Short name of the model held ("neo_hookean", "mooney_rivlin", "fiber_mooney_rivlin", ...).
 std::string material_name(const MaterialModel& m);

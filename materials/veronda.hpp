@@ -7,7 +7,8 @@
 
 namespace depthfem {
 
-/// psi = 2 alpha (exp(I1-3) - 1) + alpha beta (I2-3) + a (I3-1) - (a + 2 alpha + 2 alpha beta) ln I3.
+/// psi = 2 alpha (exp(I1-3) - 1) + alpha beta (I2-3) + a (I3-1) - (a + 2 alpha + 2 alpha beta) ln
+/// I3.
 ///
 /// Correction of the printed form. The paper prints
 ///   psi = 2 alpha exp(I1-3) + alpha beta (I2-3) + a I3 - a ln I3.

@@ -68,7 +68,8 @@ TEST(ContactScenes, SlidingBlockConvergesAtEveryStep) {
 // deformable block: its nodes follow the prescribed motion exactly, and the block's base carries
 // the contact force.
 TEST(ContactScenes, RigidBodyWithPrescribedMotionPressesADeformableBlock) {
-  const std::string path = (std::filesystem::temp_directory_path() / "depthfem_rigid_press.json").string();
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "depthfem_rigid_press.json").string();
   std::ofstream(path) << R"({
     "bodies": [
       {"name": "block", "mesh": {"generator": "box", "lo": [0, 0, 0], "hi": [1, 1, 0.3], "cells": [5, 5, 3]},
@@ -106,7 +107,9 @@ double hertz_force(double youngs, double poisson, double radius, double depth) {
 }
 
 // Vertical force on the whole block (four quarters): what the held far face carries.
-double hertz_scene_force(const StepSummary& step) { return -4 * step.reactions(2, 2); }  // rows x0, y0, support
+double hertz_scene_force(const StepSummary& step) {
+  return -4 * step.reactions(2, 2);
+}  // rows x0, y0, support
 
 // The sphere of hertz_sphere moves 0.05 m at full load; E = 100 kPa, nu = 0.3, R = 1 m.
 constexpr double kHertzTravel = 0.05;
@@ -119,9 +122,10 @@ double hertz_scene_error(const StepSummary& step) {
 // with the shipped corner-graded mesh (12 cells per core edge, shells growing 10 %, block 32 R):
 // +2.2 % to +4.6 %, rising with d. For d/R = 0.008 to 0.05, coarser meshes of the same kind give
 // +3.8 % to +5.9 % (8 cells, 32 R) and +4.0 % to +6.5 % (8 cells, 16 R); a box graded 30 % per
-// cell along each axis gave +6.7 % to +8.1 %. The error budget: the stiffness of linear tets (the largest part, falling with
-// the mesh), the base held at depth H (a Boussinesq estimate +1.09 a/H: at most +0.8 % at 32 R, the
-// rise with d), penalty compliance (about -0.5 %) and the sphere against Hertz's paraboloid
+// cell along each axis gave +6.7 % to +8.1 %. The error budget: the stiffness of linear tets (the
+// largest part, falling with the mesh), the base held at depth H (a Boussinesq estimate +1.09 a/H:
+// at most +0.8 % at 32 R, the rise with d), penalty compliance (about -0.5 %) and the sphere
+// against Hertz's paraboloid
 // (-0.1 d/R). The run takes about 3.5 minutes on two cores.
 TEST(ContactScenes, HertzSphereForceWithinFivePercentOfHertz) {
   const RunResult r = run(load("hertz_sphere"));
@@ -140,10 +144,11 @@ TEST(ContactScenes, HertzSphereForceWithinFivePercentOfHertz) {
 TEST(ContactScenes, HertzForceConvergesAsThePenaltyGrows) {
   std::vector<double> force;
   for (const char* eps : {"1e6", "1e7", "1e8"}) {
-    const RunResult p = run(load("hertz_sphere", {std::string("obstacles.0.penalty=") + eps,
-                                                  R"(bodies.0.mesh={"generator": "corner", "size": 16, "core": 0.12,
+    const RunResult p = run(load(
+        "hertz_sphere", {std::string("obstacles.0.penalty=") + eps,
+                         R"(bodies.0.mesh={"generator": "corner", "size": 16, "core": 0.12,
                                                                     "core_cells": 8, "ratio": 1.2})",
-                                                  "boundary.2.nodes.plane.offset=16", "solver.initial_increment=0.25"}));
+                         "boundary.2.nodes.plane.offset=16", "solver.initial_increment=0.25"}));
     ASSERT_TRUE(p.success) << eps << ": " << p.message;
     force.push_back(hertz_scene_force(p.steps.back()));
   }
@@ -172,7 +177,8 @@ TEST(ContactScenes, FoldedSlabRestsOnItselfBySelfContact) {
     // The lower half's top-face row at this node's reference y, as (deformed x, deformed z).
     std::vector<std::pair<double, double>> row;
     for (Index j = 0; j < X.rows(); ++j)
-      if (std::abs(X(j, 2) - thickness) < 1e-9 && X(j, 0) < 0.5 && std::abs(X(j, 1) - X(i, 1)) < 1e-9)
+      if (std::abs(X(j, 2) - thickness) < 1e-9 && X(j, 0) < 0.5 &&
+          std::abs(X(j, 1) - X(i, 1)) < 1e-9)
         row.emplace_back(r.x(j, 0), r.x(j, 2));
     std::sort(row.begin(), row.end());
     const double xi = r.x(i, 0);

@@ -25,7 +25,8 @@ using testing::run;
 // x_n = x_0 + n h v_0 + h^2 g n (n + 1) / 2 exactly; Newmark (exact for constant acceleration)
 // and ARKODE's Runge-Kutta (exact for quadratic solutions) give x_0 + t v_0 + g t^2 / 2.
 TEST(DynamicScenes, FreeFallFollowsTheDiscreteSolutionOfEachIntegrator) {
-  const std::string path = (std::filesystem::temp_directory_path() / "depthfem_free_fall.json").string();
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "depthfem_free_fall.json").string();
   std::ofstream(path) << R"({
     "analysis": "dynamic", "gravity": [0, 0, -9.81],
     "bodies": [{"name": "b", "mesh": {"generator": "box", "lo": [0, 0, 0], "hi": [0.3, 0.2, 0.1], "cells": [3, 2, 1]},
@@ -37,14 +38,18 @@ TEST(DynamicScenes, FreeFallFollowsTheDiscreteSolutionOfEachIntegrator) {
   const Vec3 v0(1, 0, 2), g(0, 0, -9.81);
   const Vec3 first_order = t * v0 + h * h * g * n * (n + 1) / 2;
   const Vec3 exact = t * v0 + 0.5 * t * t * g;
-  for (const auto& [integrator, expected] : {std::pair{"implicit_euler", first_order}, {"symplectic_euler", first_order},
-                                             {"newmark", exact}, {"arkode", exact}}) {
-    const Scene s = load_scene(path, {parse_override(std::string("dynamic.integrator=") + integrator)});
+  for (const auto& [integrator, expected] : {std::pair{"implicit_euler", first_order},
+                                             {"symplectic_euler", first_order},
+                                             {"newmark", exact},
+                                             {"arkode", exact}}) {
+    const Scene s =
+        load_scene(path, {parse_override(std::string("dynamic.integrator=") + integrator)});
     const RunResult r = run(s);
     ASSERT_TRUE(r.success) << r.message;
     ASSERT_EQ(r.steps.size(), 10u);
     for (Index i = 0; i < s.mesh.num_nodes(); ++i)
-      EXPECT_LE((r.x.row(i) - s.mesh.X.row(i) - expected.transpose()).norm(), 1e-12) << integrator << " node " << i;
+      EXPECT_LE((r.x.row(i) - s.mesh.X.row(i) - expected.transpose()).norm(), 1e-12)
+          << integrator << " node " << i;
   }
   std::filesystem::remove(path);
 }
@@ -52,7 +57,8 @@ TEST(DynamicScenes, FreeFallFollowsTheDiscreteSolutionOfEachIntegrator) {
 // Prescribed motion holds exactly at every step of every integrator: the face x = 0 of a falling
 // box is displaced linearly in time (u t / duration) while the rest moves freely.
 TEST(DynamicScenes, EveryIntegratorHonoursDirichletConditionsExactly) {
-  const std::string path = (std::filesystem::temp_directory_path() / "depthfem_prescribed.json").string();
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "depthfem_prescribed.json").string();
   std::ofstream(path) << R"({
     "analysis": "dynamic", "gravity": [0, 0, -9.81],
     "bodies": [{"name": "b", "mesh": {"generator": "box", "lo": [0, 0, 0], "hi": [0.3, 0.2, 0.1], "cells": [3, 2, 1]},
@@ -62,14 +68,18 @@ TEST(DynamicScenes, EveryIntegratorHonoursDirichletConditionsExactly) {
     "dynamic": {"time_step": 0.0002, "duration": 0.002}
   })";
   for (const char* integrator : {"implicit_euler", "newmark", "symplectic_euler", "arkode"}) {
-    const Scene s = load_scene(path, {parse_override(std::string("dynamic.integrator=") + integrator)});
+    const Scene s =
+        load_scene(path, {parse_override(std::string("dynamic.integrator=") + integrator)});
     const std::vector<Index>& face = s.constraints[0].nodes;
     double worst = 0, free_motion = 0;
     RunOptions options;
     options.observer = [&](const StepSummary& st, const Points& x) {
       const Vec3 u = Vec3(0.01, 0.02, 0.03) * (st.load / 0.002);
-      for (Index i : face) worst = std::max(worst, (x.row(i) - s.mesh.X.row(i) - u.transpose()).norm());
-      free_motion = std::max(free_motion, (x.row(s.mesh.num_nodes() - 1) - s.mesh.X.row(s.mesh.num_nodes() - 1)).norm());
+      for (Index i : face)
+        worst = std::max(worst, (x.row(i) - s.mesh.X.row(i) - u.transpose()).norm());
+      free_motion =
+          std::max(free_motion,
+                   (x.row(s.mesh.num_nodes() - 1) - s.mesh.X.row(s.mesh.num_nodes() - 1)).norm());
     };
     std::ostringstream log;
     const RunResult r = run_scene(s, options, log);
@@ -88,10 +98,11 @@ TEST(DynamicScenes, SymplecticEulerRefusesUnstableStepsAndKeepsEnergyBounded) {
     run(load("falling_bars", {"dynamic.integrator=symplectic_euler"}));
     FAIL() << "a 0.01 s explicit step must be refused";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("exceeds the stable limit"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("exceeds the stable limit"), std::string::npos)
+        << e.what();
   }
-  const Scene s = load("falling_bars", {"dynamic.integrator=symplectic_euler", "dynamic.time_step=2e-4",
-                                        "dynamic.duration=0.3"});
+  const Scene s = load("falling_bars", {"dynamic.integrator=symplectic_euler",
+                                        "dynamic.time_step=2e-4", "dynamic.duration=0.3"});
   const RunResult r = run(s);
   ASSERT_TRUE(r.success) << r.message;
   const VectorX m = lumped_mass(s.mesh.X, s.mesh.tets, s.tet_density);
@@ -131,7 +142,8 @@ TEST(DynamicScenes, ImplicitEulerEnergyDecreasesMonotonically) {
 TEST(DynamicScenes, NewmarkKeepsTheEnergyImplicitEulerDissipates) {
   double lost[2] = {0, 0};
   for (int k = 0; k < 2; ++k) {
-    const Scene s = load("falling_bars", {k == 0 ? "dynamic.integrator=newmark" : "dynamic.integrator=implicit_euler",
+    const Scene s = load("falling_bars", {k == 0 ? "dynamic.integrator=newmark"
+                                                 : "dynamic.integrator=implicit_euler",
                                           "dynamic.duration=1.0"});
     const RunResult r = run(s);
     ASSERT_TRUE(r.success) << r.message;
@@ -146,7 +158,8 @@ TEST(DynamicScenes, NewmarkKeepsTheEnergyImplicitEulerDissipates) {
   }
   EXPECT_LT(lost[0], 0.005) << "Newmark";
   EXPECT_GT(lost[1], 0.3) << "implicit Euler";
-  std::printf("energy error / peak kinetic energy: Newmark %.4f, implicit Euler %.4f\n", lost[0], lost[1]);
+  std::printf("energy error / peak kinetic energy: Newmark %.4f, implicit Euler %.4f\n", lost[0],
+              lost[1]);
 }
 
 // Tip deflection of the cantilever_gravity bar (mean over the tip face) at every step.
@@ -190,13 +203,17 @@ double dominant_period(const std::vector<double>& w, double h, double lo, double
 // converges from below, and with 8 cells it is within 5 % (measured -10.3 % and -2.8 %).
 TEST(DynamicScenes, ClampedBarVibratesAtTheBeamTheoryPeriod) {
   const double E = 1e8, rho = 1000, H = 0.1, L = 1.0;
-  const double beam = 2 * std::numbers::pi / (1.8751 * 1.8751 * std::sqrt(E * H * H / (12 * rho * std::pow(L, 4))));
-  const std::string out = (std::filesystem::temp_directory_path() / "depthfem_vibration.h5").string();
+  const double beam =
+      2 * std::numbers::pi / (1.8751 * 1.8751 * std::sqrt(E * H * H / (12 * rho * std::pow(L, 4))));
+  const std::string out =
+      (std::filesystem::temp_directory_path() / "depthfem_vibration.h5").string();
   double error[2];
   for (int k = 0; k < 2; ++k) {
-    const Scene s = load("cantilever_gravity", {"analysis=dynamic", "solver.linear_solver=cg",
-                                                 R"(dynamic={"integrator": "newmark", "time_step": 0.005, "duration": 0.25})",
-                                                 k == 0 ? "bodies.0.mesh.cells=[40,4,4]" : "bodies.0.mesh.cells=[80,8,8]"});
+    const Scene s =
+        load("cantilever_gravity",
+             {"analysis=dynamic", "solver.linear_solver=cg",
+              R"(dynamic={"integrator": "newmark", "time_step": 0.005, "duration": 0.25})",
+              k == 0 ? "bodies.0.mesh.cells=[40,4,4]" : "bodies.0.mesh.cells=[80,8,8]"});
     const RunResult r = run(s, out);
     ASSERT_TRUE(r.success) << r.message;
     error[k] = dominant_period(tip_deflection(s, out), 0.005, 0.7 * beam, 1.3 * beam) / beam - 1;
@@ -215,16 +232,19 @@ TEST(DynamicScenes, DampedAndViscousRunsSettleToTheStaticSolution) {
   const RunResult reference = run(static_scene);
   ASSERT_TRUE(reference.success) << reference.message;
   const double sag = (reference.x - static_scene.mesh.X).cwiseAbs().maxCoeff();
-  for (const char* setting : {R"(dynamic={"integrator": "newmark", "time_step": 0.01, "duration": 1.0,
+  for (const char* setting :
+       {R"(dynamic={"integrator": "newmark", "time_step": 0.01, "duration": 1.0,
                                          "damping": {"mass": 30, "stiffness": 0.002}})",
-                              R"(dynamic={"time_step": 0.05, "duration": 1.0, "viscosity": 20})"}) {
+        R"(dynamic={"time_step": 0.05, "duration": 1.0, "viscosity": 20})"}) {
     const bool viscous = std::string(setting).find("viscosity") != std::string::npos;
-    const Scene s =
-        load("cantilever_gravity", {viscous ? "analysis=quasistatic" : "analysis=dynamic", setting, "solver.tolerance=1e-11"});
+    const Scene s = load(
+        "cantilever_gravity",
+        {viscous ? "analysis=quasistatic" : "analysis=dynamic", setting, "solver.tolerance=1e-11"});
     const RunResult r = run(s);
     ASSERT_TRUE(r.success) << r.message;
     EXPECT_LT((r.x - reference.x).cwiseAbs().maxCoeff(), 1e-4 * sag) << setting;
-    EXPECT_LT(r.steps.back().kinetic_energy, 1e-8 * std::abs(reference.steps.back().energy)) << setting;
+    EXPECT_LT(r.steps.back().kinetic_energy, 1e-8 * std::abs(reference.steps.back().energy))
+        << setting;
   }
 }
 
@@ -258,7 +278,8 @@ TEST(DynamicScenes, BarsDropOntoTheFloorAndOntoEachOther) {
 
 // ARKODE's failures surface with its flag name; invalid orders are refused when the scene is read.
 TEST(DynamicScenes, ArkodeFailuresAreReportedWithTheirFlag) {
-  const RunResult r = run(load("falling_bars", {R"(dynamic.arkode={"max_steps": 2})", "dynamic.integrator=arkode"}));
+  const RunResult r = run(
+      load("falling_bars", {R"(dynamic.arkode={"max_steps": 2})", "dynamic.integrator=arkode"}));
   EXPECT_FALSE(r.success);
   EXPECT_NE(r.message.find("ARK_TOO_MUCH_WORK"), std::string::npos) << r.message;
   EXPECT_EQ(r.steps.size(), 0u);
@@ -266,7 +287,8 @@ TEST(DynamicScenes, ArkodeFailuresAreReportedWithTheirFlag) {
     load("falling_bars", {"dynamic.integrator=arkode", R"(dynamic.arkode={"order": 7})"});
     FAIL() << "order 7 has no default table";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("dynamic.arkode.order: must be 2, 3, 4, 5, 6 or 8"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("dynamic.arkode.order: must be 2, 3, 4, 5, 6 or 8"),
+              std::string::npos)
         << e.what();
   }
 }

@@ -56,30 +56,40 @@ TEST_F(SceneFileTest, ValidSceneLoads) {
 
 TEST_F(SceneFileTest, UnknownKeyIsNamedWithItsPath) {
   const std::string m = error(replaced(kValid, "\"C2\": 1", "\"C3\": 1"));
-  EXPECT_NE(m.find("scene.json: bodies[0].material.C2: missing required key"), std::string::npos) << m;
-  const std::string u = error(replaced(kValid, "\"name\": \"t\"", "\"name\": \"t\", \"gravty\": [0,0,1]"));
+  EXPECT_NE(m.find("scene.json: bodies[0].material.C2: missing required key"), std::string::npos)
+      << m;
+  const std::string u =
+      error(replaced(kValid, "\"name\": \"t\"", "\"name\": \"t\", \"gravty\": [0,0,1]"));
   EXPECT_NE(u.find("scene.json: gravty: unknown key"), std::string::npos) << u;
 }
 
 TEST_F(SceneFileTest, WrongTypesAreNamed) {
-  EXPECT_NE(error(replaced(kValid, "\"C1\": 1", "\"C1\": \"soft\"")).find("bodies[0].material.C1: expected a number"),
+  EXPECT_NE(error(replaced(kValid, "\"C1\": 1", "\"C1\": \"soft\""))
+                .find("bodies[0].material.C1: expected a number"),
             std::string::npos);
-  EXPECT_NE(error(replaced(kValid, "\"cells\": [1,1,1]", "\"cells\": [1,1]")).find("bodies[0].mesh.cells: expected an array of 3"),
+  EXPECT_NE(error(replaced(kValid, "\"cells\": [1,1,1]", "\"cells\": [1,1]"))
+                .find("bodies[0].mesh.cells: expected an array of 3"),
             std::string::npos);
-  EXPECT_NE(error(replaced(kValid, "\"offset\": 0", "\"offset\": true")).find("boundary[0].nodes.plane.offset: expected a number"),
+  EXPECT_NE(error(replaced(kValid, "\"offset\": 0", "\"offset\": true"))
+                .find("boundary[0].nodes.plane.offset: expected a number"),
             std::string::npos);
 }
 
 TEST_F(SceneFileTest, BadValuesAreNamed) {
-  EXPECT_NE(error(replaced(kValid, "mooney_rivlin", "rubber")).find("bodies[0].material.model: unknown material model 'rubber'"),
+  EXPECT_NE(error(replaced(kValid, "mooney_rivlin", "rubber"))
+                .find("bodies[0].material.model: unknown material model 'rubber'"),
             std::string::npos);
-  EXPECT_NE(error(replaced(kValid, "\"C1\": 1", "\"C1\": -1")).find("bodies[0].material.model: mooney_rivlin: C1 and C2 must be >= 0"),
+  EXPECT_NE(error(replaced(kValid, "\"C1\": 1", "\"C1\": -1"))
+                .find("bodies[0].material.model: mooney_rivlin: C1 and C2 must be >= 0"),
             std::string::npos);
-  EXPECT_NE(error(replaced(kValid, "\"offset\": 0", "\"offset\": 5")).find("boundary[0].nodes: selects no nodes"),
+  EXPECT_NE(error(replaced(kValid, "\"offset\": 0", "\"offset\": 5"))
+                .find("boundary[0].nodes: selects no nodes"),
             std::string::npos);
-  EXPECT_NE(error(replaced(kValid, "\"fixed\"", "\"glued\"")).find("boundary[0].type: unknown boundary condition 'glued'"),
+  EXPECT_NE(error(replaced(kValid, "\"fixed\"", "\"glued\""))
+                .find("boundary[0].type: unknown boundary condition 'glued'"),
             std::string::npos);
-  EXPECT_NE(error(replaced(kValid, "\"generator\": \"box\"", "\"file\": \"missing.msh\"")).find("missing.msh"),
+  EXPECT_NE(error(replaced(kValid, "\"generator\": \"box\"", "\"file\": \"missing.msh\""))
+                .find("missing.msh"),
             std::string::npos);
   EXPECT_NE(error("{\"bodies\": [").find("scene.json: invalid JSON"), std::string::npos);
 }
@@ -89,21 +99,29 @@ TEST_F(SceneFileTest, TimeIntegrationSettingsAreChecked) {
     return std::vector<Override>{parse_override("analysis=" + a), parse_override("dynamic=" + d)};
   };
   EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "rk4", "time_step": 1, "duration": 1})"))
-                .find("dynamic.integrator: unknown integrator 'rk4' (expected implicit_euler, newmark, symplectic_euler or arkode)"),
+                .find("dynamic.integrator: unknown integrator 'rk4' (expected implicit_euler, "
+                      "newmark, symplectic_euler or arkode)"),
             std::string::npos);
-  EXPECT_NE(error(kValid, set("quasistatic", R"({"time_step": 1, "duration": 1})")).find("dynamic.viscosity: missing"),
+  EXPECT_NE(error(kValid, set("quasistatic", R"({"time_step": 1, "duration": 1})"))
+                .find("dynamic.viscosity: missing"),
             std::string::npos);
-  EXPECT_NE(error(kValid, set("quasistatic", R"({"integrator": "newmark", "time_step": 1, "duration": 1, "viscosity": 1})"))
-                .find("dynamic.integrator: a quasistatic analysis uses implicit_euler"),
-            std::string::npos);
-  EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "symplectic_euler", "time_step": 1, "duration": 1,
+  EXPECT_NE(
+      error(kValid,
+            set("quasistatic",
+                R"({"integrator": "newmark", "time_step": 1, "duration": 1, "viscosity": 1})"))
+          .find("dynamic.integrator: a quasistatic analysis uses implicit_euler"),
+      std::string::npos);
+  EXPECT_NE(error(kValid, set("dynamic",
+                              R"({"integrator": "symplectic_euler", "time_step": 1, "duration": 1,
                                              "damping": {"stiffness": 0.1}})"))
                 .find("dynamic.damping.stiffness: needs an implicit integrator"),
             std::string::npos);
-  EXPECT_NE(error(kValid, set("dynamic", R"({"time_step": 1, "duration": 1, "arkode": {"order": 4}})"))
-                .find("dynamic.arkode: only for \"integrator\": \"arkode\""),
-            std::string::npos);
-  EXPECT_NE(error(kValid, {parse_override("analysis=dynamic")}).find("dynamic: missing required key for a dynamic analysis"),
+  EXPECT_NE(
+      error(kValid, set("dynamic", R"({"time_step": 1, "duration": 1, "arkode": {"order": 4}})"))
+          .find("dynamic.arkode: only for \"integrator\": \"arkode\""),
+      std::string::npos);
+  EXPECT_NE(error(kValid, {parse_override("analysis=dynamic")})
+                .find("dynamic: missing required key for a dynamic analysis"),
             std::string::npos);
 }
 
@@ -112,13 +130,15 @@ TEST_F(SceneFileTest, OverridesReachNestedKeys) {
                                              parse_override("solver.linear_solver=gmres")});
   EXPECT_EQ(s.mesh.num_tets(), 12);
   EXPECT_EQ(s.static_options.newton.linear.kind, LinearSolverKind::kGmres);
-  EXPECT_NE(error(kValid, {parse_override("bodies.3.name=x")}).find("index 3 out of range"), std::string::npos);
+  EXPECT_NE(error(kValid, {parse_override("bodies.3.name=x")}).find("index 3 out of range"),
+            std::string::npos);
   EXPECT_THROW(parse_override("no_equals_sign"), InputError);
   try {
     load_scene("/nonexistent/scene.json");
     FAIL() << "a missing scene file must throw";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("/nonexistent/scene.json: cannot open scene file"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/scene.json: cannot open scene file"),
+              std::string::npos);
   }
 }
 

@@ -34,7 +34,8 @@ double tip_deflection(const Scene& s, const Points& x) {
 // compared: the error must fall at each refinement and the finest be within 3 %.
 TEST(StaticScenes, CantileverConvergesToTimoshenkoBeam) {
   const double E = 1e8, nu = 0.3, rho = 1000, g = 9.81, L = 1, a = 0.1;
-  const double A = a * a, I = a * a * a * a / 12, G = E / (2 * (1 + nu)), kappa = 10 * (1 + nu) / (12 + 11 * nu);
+  const double A = a * a, I = a * a * a * a / 12, G = E / (2 * (1 + nu)),
+               kappa = 10 * (1 + nu) / (12 + 11 * nu);
   const double q = rho * g * A;
   const double reference = q * std::pow(L, 4) / (8 * E * I) + q * L * L / (2 * kappa * G * A);
   double previous_error = 1;
@@ -68,11 +69,15 @@ void expect_uniaxial(const std::string& material_json, const M& model) {
 }
 
 TEST(StaticScenes, UniaxialBlockMatchesClosedFormForEveryMaterial) {
-  expect_uniaxial(R"({"model": "neo_hookean", "mu": 10000, "lambda": 40000})", NeoHookean{1e4, 4e4});
-  expect_uniaxial(R"({"model": "mooney_rivlin", "C1": 4000, "C2": 1000, "a": 20000})", MooneyRivlin{4e3, 1e3, 2e4});
-  expect_uniaxial(R"({"model": "veronda", "alpha": 1500, "beta": 0.8, "a": 20000})", Veronda{1.5e3, 0.8, 2e4});
-  expect_uniaxial(R"({"model": "nearly_incompressible_mooney_rivlin", "C1": 4000, "C2": 1000, "kappa": 500000})",
-                  NearlyIncompressibleMooneyRivlin{4e3, 1e3, 5e5});
+  expect_uniaxial(R"({"model": "neo_hookean", "mu": 10000, "lambda": 40000})",
+                  NeoHookean{1e4, 4e4});
+  expect_uniaxial(R"({"model": "mooney_rivlin", "C1": 4000, "C2": 1000, "a": 20000})",
+                  MooneyRivlin{4e3, 1e3, 2e4});
+  expect_uniaxial(R"({"model": "veronda", "alpha": 1500, "beta": 0.8, "a": 20000})",
+                  Veronda{1.5e3, 0.8, 2e4});
+  expect_uniaxial(
+      R"({"model": "nearly_incompressible_mooney_rivlin", "C1": 4000, "C2": 1000, "kappa": 500000})",
+      NearlyIncompressibleMooneyRivlin{4e3, 1e3, 5e5});
   expect_uniaxial(R"({"model": "fiber_mooney_rivlin", "C1": 4000, "C2": 1000, "a": 20000,
                       "fiber_alpha": 2000, "fiber_beta": 3, "fiber_direction": [1, 0, 0]})",
                   FiberReinforced<MooneyRivlin>{{4e3, 1e3, 2e4}, 2e3, 3});
@@ -123,7 +128,8 @@ TEST(StaticScenes, BucklingColumnLeavesTheStraightBranch) {
   const auto lateral = [&](const Points& x) {
     return (x - s.mesh.X).leftCols<2>().rowwise().norm().maxCoeff();
   };
-  EXPECT_GT(lateral(buckled.x), 0.05) << "the column must bend visibly (section half-width 0.025 m)";
+  EXPECT_GT(lateral(buckled.x), 0.05)
+      << "the column must bend visibly (section half-width 0.025 m)";
 
   Scene straight = load("buckling_column", {"solver.quasi_viscosity=0"});
   std::vector<Index> axis;
@@ -140,7 +146,8 @@ TEST(StaticScenes, BucklingColumnLeavesTheStraightBranch) {
 // A load that cannot be reached (shortening the unit block by 1.5) stops with a clear error once
 // the increment falls below its minimum; the completed increments stay readable in the file.
 TEST(StaticScenes, FailedRunKeepsCompletedIncrements) {
-  const std::string out = (std::filesystem::temp_directory_path() / "depthfem_failed_run.h5").string();
+  const std::string out =
+      (std::filesystem::temp_directory_path() / "depthfem_failed_run.h5").string();
   const Scene s = load("uniaxial_block", {"boundary.3.offset=-1.5", "solver.min_increment=0.01"});
   const RunResult r = run(s, out);
   EXPECT_FALSE(r.success);
@@ -158,10 +165,12 @@ TEST(StaticScenes, FailedRunKeepsCompletedIncrements) {
 
 // Every scene shipped in apps/scenes is run by some test; this list is checked against the folder.
 TEST(StaticScenes, EveryShippedSceneIsTested) {
-  const std::set<std::string> tested = {"cantilever_gravity", "uniaxial_block", "twist_bar", "buckling_column",
-                                        "blocks_overlap", "ball_drop", "sliding_blocks", "falling_bars", "bars_drop",
-                                        "hertz_sphere", "fold_slab"};
-  for (const auto& entry : std::filesystem::directory_iterator(std::string(DEPTHFEM_SOURCE_DIR) + "/apps/scenes")) {
+  const std::set<std::string> tested = {"cantilever_gravity", "uniaxial_block", "twist_bar",
+                                        "buckling_column",    "blocks_overlap", "ball_drop",
+                                        "sliding_blocks",     "falling_bars",   "bars_drop",
+                                        "hertz_sphere",       "fold_slab"};
+  for (const auto& entry :
+       std::filesystem::directory_iterator(std::string(DEPTHFEM_SOURCE_DIR) + "/apps/scenes")) {
     if (entry.path().extension() != ".json") continue;
     EXPECT_TRUE(tested.count(entry.path().stem().string())) << entry.path() << " has no test";
     EXPECT_NO_THROW(load_scene(entry.path().string()));

@@ -13,12 +13,15 @@ using Tet = std::array<Vec3, 4>;
 using Tri = std::array<Vec3, 3>;
 
 // Regular-ish positively oriented tet around the origin.
-Tet reference_tet() { return {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)}; }
+Tet reference_tet() {
+  return {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
+}
 
 // Area of the part of Q inside P and the integral of g^2 there (g linear in the tet, corner
 // values gv), by the midpoint rule on n^2 congruent sub-triangles of Q; cells cut by the tet
 // boundary cause an error of order (perimeter x cell size), i.e. relative ~ 3 / n.
-std::pair<double, double> brute_force(const Tet& P, const Tri& Q, const std::array<double, 4>& gv, int n) {
+std::pair<double, double> brute_force(const Tet& P, const Tri& Q, const std::array<double, 4>& gv,
+                                      int n) {
   Mat3 D;
   for (int k = 0; k < 3; ++k) D.col(k) = P[k + 1] - P[0];
   const Mat3 Dinv = D.inverse();
@@ -34,7 +37,8 @@ std::pair<double, double> brute_force(const Tet& P, const Tri& Q, const std::arr
         const Vec3 x = Q[0] + s * (Q[1] - Q[0]) + t * (Q[2] - Q[0]);
         const Vec3 l = Dinv * (x - P[0]);
         if (l.minCoeff() < 0 || l.sum() > 1) continue;
-        const double g = gv[0] + l(0) * (gv[1] - gv[0]) + l(1) * (gv[2] - gv[0]) + l(2) * (gv[3] - gv[0]);
+        const double g =
+            gv[0] + l(0) * (gv[1] - gv[0]) + l(1) * (gv[2] - gv[0]) + l(2) * (gv[3] - gv[0]);
         area += cell;
         integral += cell * g * g;
       }
@@ -43,7 +47,8 @@ std::pair<double, double> brute_force(const Tet& P, const Tri& Q, const std::arr
 
 double polygon_area(const ClipPolygon& p) {
   double a = 0;
-  for (int k = 1; k + 1 < p.size; ++k) a += 0.5 * (p.x[k] - p.x[0]).cross(p.x[k + 1] - p.x[0]).norm();
+  for (int k = 1; k + 1 < p.size; ++k)
+    a += 0.5 * (p.x[k] - p.x[0]).cross(p.x[k + 1] - p.x[0]).norm();
   return a;
 }
 
@@ -60,7 +65,8 @@ TEST(Clip, AreaAndPenaltyMatchQuadratureOnRandomConfigurations) {
   const std::array<double, 4> gv = {0.3, 0.1, 0.5, 0.2};
   int tested = 0, kinds[3] = {0, 0, 0};
   while (tested < 60) {
-    const Tri Q = {Vec3(u(rng), u(rng), u(rng)), Vec3(u(rng), u(rng), u(rng)), Vec3(u(rng), u(rng), u(rng))};
+    const Tri Q = {Vec3(u(rng), u(rng), u(rng)), Vec3(u(rng), u(rng), u(rng)),
+                   Vec3(u(rng), u(rng), u(rng))};
     if ((Q[1] - Q[0]).cross(Q[2] - Q[0]).norm() < 0.2) continue;  // avoid slivers
     const ClipPolygon poly = clip_triangle_by_tet(P, Q);
     const auto [area, integral] = brute_force(P, Q, gv, 800);

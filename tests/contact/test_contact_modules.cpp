@@ -51,7 +51,8 @@ TEST(MaterialDepthContact, UndeformedBodiesWithSelfContactHaveNoContactForces) {
 TEST(MaterialDepthContact, AssembledDerivativesMatchFiniteDifferences) {
   Mesh m;
   m.add_body("low", box_mesh({Vec3(0, 0, 0), Vec3(1, 1, 0.4), Eigen::Vector3i(4, 4, 2)}));
-  m.add_body("high", box_mesh({Vec3(0.23, 0.17, 0.3), Vec3(0.83, 0.77, 0.6), Eigen::Vector3i(3, 3, 2)}));
+  m.add_body("high",
+             box_mesh({Vec3(0.23, 0.17, 0.3), Vec3(0.83, 0.77, 0.6), Eigen::Vector3i(3, 3, 2)}));
   MaterialDepthContact c(m, material_depth(m), {1e5, true});
   c.begin_step(m.X, 0);
   std::mt19937 rng(5);
@@ -77,7 +78,8 @@ TEST(MaterialDepthContact, AssembledDerivativesMatchFiniteDifferences) {
   std::normal_distribution<double> n;
   VectorX v(x.size());
   for (Index i = 0; i < v.size(); ++i) v(i) = n(rng);
-  const Points dir = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(v.data(), x.rows(), 3);
+  const Points dir = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
+      v.data(), x.rows(), 3);
   VectorX gp = VectorX::Zero(v.size()), gm = VectorX::Zero(v.size());
   c.prepare(x + h * dir);
   c.evaluate(x + h * dir, &gp, nullptr);
@@ -110,7 +112,8 @@ double largest_jump(ForceModule& m, const Mesh& mesh, Index plate_first_node, in
 TEST(ContactContinuity, MaterialDepthForcesAreContinuousAndNodeToSurfaceForcesJump) {
   Mesh m;
   m.add_body("ball", ball_mesh({Vec3::Zero(), 0.5, 6}));
-  m.add_body("plate", box_mesh({Vec3(-0.25, -0.25, 0.46), Vec3(0.25, 0.25, 0.6), Eigen::Vector3i(10, 10, 2)}));
+  m.add_body("plate", box_mesh({Vec3(-0.25, -0.25, 0.46), Vec3(0.25, 0.25, 0.6),
+                                Eigen::Vector3i(10, 10, 2)}));
   const Index first = m.bodies[1].first_node;
   MaterialDepthContact depth(m, material_depth(m), {1e5, false});
   NodeToSurfaceContact baseline(m, 1e5);
@@ -129,15 +132,18 @@ TEST(ObstacleContact, PlaneForceMatchesClosedForm) {
   // area, and the four side walls (perimeter 4) dip into the obstacle with depth falling from d
   // to 0: energy eps/2 (d^2 + 4 d^3 / 3), upward force eps (d + 4 d^2 / 2), area 1 + 4 d.
   const double eps = 1e6, d = 0.01;
-  const Mesh m = single_body_mesh(box_mesh({Vec3(0, 0, -d), Vec3(1, 1, 0.2), Eigen::Vector3i(4, 4, 2)}));
-  ObstacleContact o(m, {0}, {{"floor", PlaneObstacle{Vec3::Zero(), Vec3::UnitZ()}, Vec3::Zero(), eps}});
+  const Mesh m =
+      single_body_mesh(box_mesh({Vec3(0, 0, -d), Vec3(1, 1, 0.2), Eigen::Vector3i(4, 4, 2)}));
+  ObstacleContact o(m, {0},
+                    {{"floor", PlaneObstacle{Vec3::Zero(), Vec3::UnitZ()}, Vec3::Zero(), eps}});
   o.begin_step(m.X, 0);
   o.prepare(m.X);
   EXPECT_LE((o.total_force(m.X) - Vec3(0, 0, eps * (d + 2 * d * d))).norm(), 1e-8);
   EXPECT_NEAR(o.contact_area(m.X), 1 + 4 * d, 1e-12);
   EXPECT_NEAR(o.evaluate(m.X, nullptr, nullptr), eps / 2 * (d * d + 4 * d * d * d / 3), 1e-9);
   // The obstacle moves with the load factor: at load 1 the plane has risen by d, doubling depths.
-  ObstacleContact moving(m, {0}, {{"floor", PlaneObstacle{Vec3::Zero(), Vec3::UnitZ()}, Vec3(0, 0, d), eps}});
+  ObstacleContact moving(
+      m, {0}, {{"floor", PlaneObstacle{Vec3::Zero(), Vec3::UnitZ()}, Vec3(0, 0, d), eps}});
   moving.begin_step(m.X, 1.0);
   moving.prepare(m.X);
   EXPECT_NEAR(moving.total_force(m.X)(2), eps * (2 * d + 2 * 4 * d * d), 1e-8);
@@ -162,10 +168,12 @@ TEST(ObstacleContact, SphereEnergyAndForceMatchTheLinearDepthIntegral) {
     double W = 0;
     for (Index f = 0; f < m.num_tris(); ++f) {
       double G[3];
-      for (int k = 0; k < 3; ++k) G[k] = R - (x.row(m.tris(f, k)).transpose() - c - load * motion).norm();
+      for (int k = 0; k < 3; ++k)
+        G[k] = R - (x.row(m.tris(f, k)).transpose() - c - load * motion).norm();
       const Vec3 a = x.row(m.tris(f, 0)), b = x.row(m.tris(f, 1)), d = x.row(m.tris(f, 2));
       const double area = 0.5 * (b - a).cross(d - a).norm();
-      W += eps * area / 12 * (G[0] * G[0] + G[1] * G[1] + G[2] * G[2] + G[0] * G[1] + G[0] * G[2] + G[1] * G[2]);
+      W += eps * area / 12 *
+           (G[0] * G[0] + G[1] * G[1] + G[2] * G[2] + G[0] * G[1] + G[0] * G[2] + G[1] * G[2]);
     }
     return W;
   };
@@ -179,7 +187,8 @@ TEST(ObstacleContact, SphereEnergyAndForceMatchTheLinearDepthIntegral) {
       Points xp = m.X, xm = m.X;
       xp(i / 3, i % 3) += 1e-7;
       xm(i / 3, i % 3) -= 1e-7;
-      EXPECT_NEAR(g(i), (energy(xp, load) - energy(xm, load)) / 2e-7, 1e-6 * g.cwiseAbs().maxCoeff());
+      EXPECT_NEAR(g(i), (energy(xp, load) - energy(xm, load)) / 2e-7,
+                  1e-6 * g.cwiseAbs().maxCoeff());
     }
   }
 }

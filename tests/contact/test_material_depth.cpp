@@ -50,12 +50,16 @@ TEST(MaterialDepth, BallDepthApproachesRadiusMinusDistance) {
 TEST(MaterialDepth, EachBodyMeasuresItsOwnBoundary) {
   Mesh m;
   m.add_body("a", box_mesh({Vec3::Zero(), Vec3::Ones(), Eigen::Vector3i(4, 4, 4)}));
-  m.add_body("b", box_mesh({Vec3(0.25, 0.25, 0.25), Vec3(0.75, 0.75, 0.75), Eigen::Vector3i(2, 2, 2)}));
+  m.add_body("b",
+             box_mesh({Vec3(0.25, 0.25, 0.25), Vec3(0.75, 0.75, 0.75), Eigen::Vector3i(2, 2, 2)}));
   const VectorX d = material_depth(m);
   const Body& b = m.bodies[1];
   // The centre node of b is 0.25 deep in b (not 0.5 as it would be in a).
-  for (Index i = b.first_node; i < b.first_node + b.num_nodes; ++i)
-    if ((m.X.row(i) - Eigen::RowVector3d(0.5, 0.5, 0.5)).norm() < 1e-12) EXPECT_NEAR(d(i), 0.25, 1e-14);
+  for (Index i = b.first_node; i < b.first_node + b.num_nodes; ++i) {
+    if ((m.X.row(i) - Eigen::RowVector3d(0.5, 0.5, 0.5)).norm() < 1e-12) {
+      EXPECT_NEAR(d(i), 0.25, 1e-14);
+    }
+  }
 }
 
 }  // namespace

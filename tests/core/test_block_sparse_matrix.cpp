@@ -1,8 +1,8 @@
 // Sparse pattern, scatter offsets and element coloring against dense / brute-force references.
 #include <gtest/gtest.h>
 
-#include <random>
 #include <map>
+#include <random>
 #include <set>
 
 #include "core/block_sparse_matrix.hpp"
@@ -54,20 +54,22 @@ TEST(ElementPartition, ChunksOfAColorShareNoNodeAndEveryElementAppearsOnce) {
     for (int a = 0; a < 4; ++a) centroids.row(t) += 0.25 * m.X.row(m.tets(t, a));
   }
   const Index chunk = 16;
-  const ElementPartition p = partition_elements(m.tets, static_cast<Index>(m.X.rows()), centroids, chunk);
+  const ElementPartition p =
+      partition_elements(m.tets, static_cast<Index>(m.X.rows()), centroids, chunk);
   std::multiset<Index> seen(p.order.begin(), p.order.end());
   ASSERT_EQ(seen.size(), static_cast<size_t>(m.tets.rows()));
   for (Index t = 0; t < m.tets.rows(); ++t) EXPECT_EQ(seen.count(t), 1u);
   ASSERT_EQ(p.color_begin.back(), p.num_chunks());
-  for (Index k = 0; k < p.num_chunks(); ++k) EXPECT_LE(p.chunk_begin[k + 1] - p.chunk_begin[k], chunk);
+  for (Index k = 0; k < p.num_chunks(); ++k)
+    EXPECT_LE(p.chunk_begin[k + 1] - p.chunk_begin[k], chunk);
   for (Index c = 0; c < p.num_colors(); ++c) {
     std::map<Index, Index> owner;  // node -> chunk that touched it in this color
     for (Index k = p.color_begin[c]; k < p.color_begin[c + 1]; ++k)
       for (Index q = p.chunk_begin[k]; q < p.chunk_begin[k + 1]; ++q)
         for (int a = 0; a < 4; ++a) {
           const auto [it, fresh] = owner.emplace(m.tets(p.order[q], a), k);
-          EXPECT_TRUE(fresh || it->second == k) << "color " << c << ": chunks " << it->second << " and " << k
-                                                << " share node " << it->first;
+          EXPECT_TRUE(fresh || it->second == k) << "color " << c << ": chunks " << it->second
+                                                << " and " << k << " share node " << it->first;
         }
   }
   // Compact chunks need few colors (a chunk meets a bounded number of neighbours).

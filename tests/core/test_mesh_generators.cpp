@@ -16,8 +16,8 @@ namespace {
 double total_volume(const TetMesh& m) {
   double v = 0;
   for (Index t = 0; t < m.tets.rows(); ++t) {
-    const double vt = signed_volume(m.X.row(m.tets(t, 0)), m.X.row(m.tets(t, 1)), m.X.row(m.tets(t, 2)),
-                                    m.X.row(m.tets(t, 3)));
+    const double vt = signed_volume(m.X.row(m.tets(t, 0)), m.X.row(m.tets(t, 1)),
+                                    m.X.row(m.tets(t, 2)), m.X.row(m.tets(t, 3)));
     EXPECT_GT(vt, 0) << "tet " << t;
     v += vt;
   }
@@ -41,7 +41,8 @@ void expect_closed_oriented(const TriIndices& F) {
   for (Index f = 0; f < F.rows(); ++f)
     for (int k = 0; k < 3; ++k) ++directed[{F(f, k), F(f, (k + 1) % 3)}];
   for (const auto& [edge, count] : directed) {
-    EXPECT_EQ(count, 1) << "edge " << edge.first << "-" << edge.second << " used twice in one direction";
+    EXPECT_EQ(count, 1) << "edge " << edge.first << "-" << edge.second
+                        << " used twice in one direction";
     EXPECT_EQ(directed.count({edge.second, edge.first}), 1u) << "edge without twin";
   }
 }
@@ -67,7 +68,8 @@ TEST(CornerMesh, ConformingCubeWithShellsGrowingGeometrically) {
   const int m = 3;
   const TetMesh mesh = corner_mesh({2.0, 0.1, m, 1.5});
   const int shells = static_cast<int>(std::ceil(std::log(20.0) / std::log(1.5)));  // 0.1 -> 2
-  EXPECT_EQ(mesh.X.rows(), (m + 1) * (m + 1) * (m + 1) + shells * ((m + 1) * (m + 1) * (m + 1) - m * m * m));
+  EXPECT_EQ(mesh.X.rows(),
+            (m + 1) * (m + 1) * (m + 1) + shells * ((m + 1) * (m + 1) * (m + 1) - m * m * m));
   EXPECT_EQ(mesh.tets.rows(), 6 * m * m * m + 18 * m * m * shells);
   EXPECT_NEAR(total_volume(mesh), 8.0, 1e-12);
   const BoundaryFaces b = boundary_faces(mesh.tets);
@@ -84,7 +86,8 @@ TEST(CornerMesh, ConformingCubeWithShellsGrowingGeometrically) {
   for (Index t = 0; t < mesh.tets.rows(); ++t)
     for (int a = 0; a < 4; ++a)
       for (int c = a + 1; c < 4; ++c)
-        shortest = std::min(shortest, (mesh.X.row(mesh.tets(t, a)) - mesh.X.row(mesh.tets(t, c))).norm());
+        shortest =
+            std::min(shortest, (mesh.X.row(mesh.tets(t, a)) - mesh.X.row(mesh.tets(t, c))).norm());
   EXPECT_NEAR(shortest, 0.1 / m, 1e-12);
 }
 

@@ -17,10 +17,11 @@ Points four_points() {
 
 TEST(Constraints, TargetsOfEachKind) {
   const Points X = four_points();
-  const Constraints c(X, {{"fix", {0}, Fixed{}},
-                          {"move", {1}, Displaced{Vec3(0.1, 0.2, 0.3)}},
-                          {"turn", {2}, Rotated{Vec3::UnitZ(), Vec3::Zero(), std::numbers::pi / 2, Vec3(0, 0, 1)}},
-                          {"slide", {3}, InPlane{Vec3(0, 0, 2), 0.5}}});
+  const Constraints c(
+      X, {{"fix", {0}, Fixed{}},
+          {"move", {1}, Displaced{Vec3(0.1, 0.2, 0.3)}},
+          {"turn", {2}, Rotated{Vec3::UnitZ(), Vec3::Zero(), std::numbers::pi / 2, Vec3(0, 0, 1)}},
+          {"slide", {3}, InPlane{Vec3(0, 0, 2), 0.5}}});
   Points x = X.array() + 7.0;  // garbage everywhere
   c.impose(0.5, x);
   EXPECT_LE((x.row(0) - X.row(0)).norm(), 1e-15);
@@ -49,7 +50,8 @@ TEST(Constraints, PlanesCombineIntoLinesAndPoints) {
   EXPECT_NEAR(g.segment<3>(0).norm(), 0.0, 1e-15);
   EXPECT_NEAR(g(5), 1.0, 1e-15);  // node 1, z free
   EXPECT_NEAR(g(3) + g(4), 0.0, 1e-15);
-  EXPECT_THROW(Constraints(X, {{"p", {2}, InPlane{Vec3::UnitX(), 0.1}}, {"q", {2}, InPlane{Vec3::UnitX(), 0.3}}}),
+  EXPECT_THROW(Constraints(X, {{"p", {2}, InPlane{Vec3::UnitX(), 0.1}},
+                               {"q", {2}, InPlane{Vec3::UnitX(), 0.3}}}),
                InputError);
 }
 
@@ -88,7 +90,8 @@ TEST(Constraints, RejectsBadInput) {
   EXPECT_THROW(Constraints(X, {{"a", {9}, Fixed{}}}), InputError);
   EXPECT_THROW(Constraints(X, {{"a", {}, Fixed{}}}), InputError);
   EXPECT_THROW(Constraints(X, {{"a", {0}, InPlane{Vec3::Zero(), 0}}}), InputError);
-  EXPECT_THROW(Constraints(X, {{"a", {0}, Rotated{Vec3::Zero(), Vec3::Zero(), 1, Vec3::Zero()}}}), InputError);
+  EXPECT_THROW(Constraints(X, {{"a", {0}, Rotated{Vec3::Zero(), Vec3::Zero(), 1, Vec3::Zero()}}}),
+               InputError);
 }
 
 }  // namespace

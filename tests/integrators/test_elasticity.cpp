@@ -66,17 +66,21 @@ TEST(Elasticity, PatchTestForEveryMaterial) {
   for (const MaterialModel& model : all_models()) {
     Elasticity e(m.X, m.tets, {whole_mesh(m, model, fiber)});
     const Assembled r = assemble(e, x);
-    const double psi = std::visit([&](const auto& mat) { return energy_density(mat, A, fiber); }, model);
-    EXPECT_NEAR(r.energy, psi * 0.3 * 0.2 * 0.1, 1e-12 * std::abs(r.energy)) << material_name(model);
+    const double psi =
+        std::visit([&](const auto& mat) { return energy_density(mat, A, fiber); }, model);
+    EXPECT_NEAR(r.energy, psi * 0.3 * 0.2 * 0.1, 1e-12 * std::abs(r.energy))
+        << material_name(model);
     const double scale = r.gradient.cwiseAbs().maxCoeff();
     ASSERT_GT(scale, 0);
     int interior = 0;
     for (Index v = 0; v < m.X.rows(); ++v) {
       const Vec3 p = m.X.row(v);
-      const bool inside = (p.array() > 1e-9).all() && (p.array() < Vec3(0.3, 0.2, 0.1).array() - 1e-9).all();
+      const bool inside =
+          (p.array() > 1e-9).all() && (p.array() < Vec3(0.3, 0.2, 0.1).array() - 1e-9).all();
       if (!inside) continue;
       ++interior;
-      EXPECT_LE(r.gradient.segment<3>(3 * v).norm(), 1e-12 * scale) << material_name(model) << " node " << v;
+      EXPECT_LE(r.gradient.segment<3>(3 * v).norm(), 1e-12 * scale)
+          << material_name(model) << " node " << v;
     }
     EXPECT_EQ(interior, 8);
   }
@@ -116,7 +120,8 @@ TEST(Elasticity, GradientAndHessianMatchFiniteDifferences) {
       e.evaluate(x + h * dir, &gp, nullptr);
       e.evaluate(x - h * dir, &gm, nullptr);
       const VectorX Hv = H * v, Hv_fd = (gp - gm) / (2 * h);
-      EXPECT_LE((Hv - Hv_fd).cwiseAbs().maxCoeff(), 1e-6 * Hv.cwiseAbs().maxCoeff()) << material_name(model);
+      EXPECT_LE((Hv - Hv_fd).cwiseAbs().maxCoeff(), 1e-6 * Hv.cwiseAbs().maxCoeff())
+          << material_name(model);
     }
   }
 }
@@ -125,7 +130,8 @@ TEST(Elasticity, SameResultsOnOneAndTwoThreads) {
   const TetMesh m = box_mesh({Vec3::Zero(), Vec3(1, 0.5, 0.5), Eigen::Vector3i(16, 8, 8)});
   const Points x = perturbed(m.X, 0.005, 5);
   // Two groups with different models, split by tet parity.
-  ElasticGroup a{MooneyRivlin{4e3, 1e3, 2e4}, {}, Points()}, b{Veronda{1.5e3, 0.8, 2e4}, {}, Points()};
+  ElasticGroup a{MooneyRivlin{4e3, 1e3, 2e4}, {}, Points()},
+      b{Veronda{1.5e3, 0.8, 2e4}, {}, Points()};
   for (Index t = 0; t < m.tets.rows(); ++t) (t % 2 ? a : b).tets.push_back(t);
   Elasticity e(m.X, m.tets, {a, b});
   auto run = [&](int threads) {
@@ -136,7 +142,9 @@ TEST(Elasticity, SameResultsOnOneAndTwoThreads) {
   // Deterministic by construction (coloring + fixed chunking): identical, not merely close.
   EXPECT_EQ(one.energy, two.energy);
   EXPECT_EQ((one.gradient - two.gradient).cwiseAbs().maxCoeff(), 0.0);
-  EXPECT_EQ((one.hessian.to_sparse().coeffs() - two.hessian.to_sparse().coeffs()).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(
+      (one.hessian.to_sparse().coeffs() - two.hessian.to_sparse().coeffs()).cwiseAbs().maxCoeff(),
+      0.0);
   EXPECT_NEAR(one.energy, two.energy, 1e-12 * std::abs(one.energy));  // the requirement
 }
 
@@ -156,8 +164,9 @@ TEST(Elasticity, RejectsBadGroups) {
   const TetMesh m = box_mesh({Vec3::Zero(), Vec3::Ones(), Eigen::Vector3i(1, 1, 1)});
   EXPECT_THROW(Elasticity(m.X, m.tets, {{MooneyRivlin{-1, 0, 0}, {0}, Points()}}), InputError);
   EXPECT_THROW(Elasticity(m.X, m.tets, {{MooneyRivlin{1, 0, 1}, {99}, Points()}}), InputError);
-  EXPECT_THROW(Elasticity(m.X, m.tets, {{FiberReinforced<MooneyRivlin>{{1, 0, 1}, 1, 1}, {0}, Points()}}),
-               InputError);
+  EXPECT_THROW(
+      Elasticity(m.X, m.tets, {{FiberReinforced<MooneyRivlin>{{1, 0, 1}, 1, 1}, {0}, Points()}}),
+      InputError);
 }
 
 }  // namespace

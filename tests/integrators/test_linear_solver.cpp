@@ -34,7 +34,8 @@ Problem clamped_block(double shift) {
     if (m.X(i, 0) == 0) clamp.push_back(i);
   const Constraints c(m.X, {{"clamp", clamp, Fixed{}}});
   c.project(p.A);
-  for (Index i = 0; i < p.A.num_nodes(); ++i) p.A.block(p.A.block_index(i, i)).diagonal().array() -= shift;
+  for (Index i = 0; i < p.A.num_nodes(); ++i)
+    p.A.block(p.A.block_index(i, i)).diagonal().array() -= shift;
   p.b = VectorX::LinSpaced(p.b.size(), -1, 1);
   c.project(p.b);
   return p;

@@ -7,8 +7,8 @@
 
 #include <Eigen/Geometry>
 
-#include "materials/material.hpp"
 #include "materials/closed_forms.hpp"
+#include "materials/material.hpp"
 
 namespace depthfem {
 namespace {
@@ -17,12 +17,24 @@ using Mat3 = Eigen::Matrix3d;
 using Vec3 = Eigen::Vector3d;
 
 // Representative parameters [Pa]; soft-tissue scale so that errors are judged against ~1e4 Pa.
-NeoHookean neo() { return NeoHookean::from_youngs(3e4, 0.4); }
-MooneyRivlin mr() { return {4e3, 1e3, 2e4}; }
-Veronda veronda() { return {1.5e3, 0.8, 2e4}; }
-NearlyIncompressibleMooneyRivlin nimr() { return {4e3, 1e3, 5e5}; }
-FiberReinforced<MooneyRivlin> fiber_mr() { return {mr(), 2e3, 3.0}; }
-FiberReinforced<Veronda> fiber_veronda() { return {veronda(), 2e3, 3.0}; }
+NeoHookean neo() {
+  return NeoHookean::from_youngs(3e4, 0.4);
+}
+MooneyRivlin mr() {
+  return {4e3, 1e3, 2e4};
+}
+Veronda veronda() {
+  return {1.5e3, 0.8, 2e4};
+}
+NearlyIncompressibleMooneyRivlin nimr() {
+  return {4e3, 1e3, 5e5};
+}
+FiberReinforced<MooneyRivlin> fiber_mr() {
+  return {mr(), 2e3, 3.0};
+}
+FiberReinforced<Veronda> fiber_veronda() {
+  return {veronda(), 2e3, 3.0};
+}
 
 // Random F = I + 0.35 * noise with det F >= 0.3, and a random unit fiber direction.
 struct RandomState {
@@ -47,25 +59,38 @@ class MaterialTest : public ::testing::Test {};
 template <class M>
 M sample();
 template <>
-NeoHookean sample() { return neo(); }
+NeoHookean sample() {
+  return neo();
+}
 template <>
-MooneyRivlin sample() { return mr(); }
+MooneyRivlin sample() {
+  return mr();
+}
 template <>
-Veronda sample() { return veronda(); }
+Veronda sample() {
+  return veronda();
+}
 template <>
-NearlyIncompressibleMooneyRivlin sample() { return nimr(); }
+NearlyIncompressibleMooneyRivlin sample() {
+  return nimr();
+}
 template <>
-FiberReinforced<MooneyRivlin> sample() { return fiber_mr(); }
+FiberReinforced<MooneyRivlin> sample() {
+  return fiber_mr();
+}
 template <>
-FiberReinforced<Veronda> sample() { return fiber_veronda(); }
+FiberReinforced<Veronda> sample() {
+  return fiber_veronda();
+}
 
-using AllMaterials = ::testing::Types<NeoHookean, MooneyRivlin, Veronda, NearlyIncompressibleMooneyRivlin,
-                                      FiberReinforced<MooneyRivlin>, FiberReinforced<Veronda>>;
+using AllMaterials =
+    ::testing::Types<NeoHookean, MooneyRivlin, Veronda, NearlyIncompressibleMooneyRivlin,
+                     FiberReinforced<MooneyRivlin>, FiberReinforced<Veronda>>;
 TYPED_TEST_SUITE(MaterialTest, AllMaterials);
 
 // Central differences with step 1e-6 on entries of F of order 1 have truncation error ~1e-12 *
-// third derivative and round-off ~1e-16 * psi / 1e-6; relative 1e-6 of the largest entry bounds both
-// for these moduli with a wide margin.
+// third derivative and round-off ~1e-16 * psi / 1e-6; relative 1e-6 of the largest entry bounds
+// both for these moduli with a wide margin.
 TYPED_TEST(MaterialTest, StressMatchesFiniteDifferencesOfEnergy) {
   const TypeParam m = sample<TypeParam>();
   RandomState rnd;
@@ -82,7 +107,9 @@ TYPED_TEST(MaterialTest, StressMatchesFiniteDifferencesOfEnergy) {
       P_fd(i) = (energy_density(m, Fp, f) - energy_density(m, Fm, f)) / (2 * h);
     }
     EXPECT_LE((P - P_fd).cwiseAbs().maxCoeff(), 1e-6 * P.cwiseAbs().maxCoeff() + 1e-6)
-        << "trial " << trial << "\nP=\n" << P << "\nfd=\n" << P_fd;
+        << "trial " << trial << "\nP=\n"
+        << P << "\nfd=\n"
+        << P_fd;
   }
 }
 
@@ -177,7 +204,9 @@ TYPED_TEST(MaterialTest, SmallStrainSlopeIsYoungsModulus) {
 struct ShearCoefficients {
   double psi1, psi2, psiJ, psi4 = 0;
 };
-ShearCoefficients shear_coefficients(const NeoHookean& m, double) { return {m.mu / 2, 0, -m.mu}; }
+ShearCoefficients shear_coefficients(const NeoHookean& m, double) {
+  return {m.mu / 2, 0, -m.mu};
+}
 ShearCoefficients shear_coefficients(const MooneyRivlin& m, double) {
   return {m.C1, m.C2, 2 * m.a - 2 * (m.C1 + 2 * m.C2 + m.a)};
 }
@@ -210,11 +239,14 @@ TYPED_TEST(MaterialTest, SimpleShearMatchesClosedForm) {
     expected(2, 2) = 2 * c.psi1 + 2 * c.psi2 * (2 + g * g) + c.psiJ;
     const Mat3 P = first_piola(m, F, Vec3::UnitY());
     EXPECT_LE((P - expected).cwiseAbs().maxCoeff(), 1e-12 * expected.cwiseAbs().maxCoeff())
-        << "shear " << g << "\nP=\n" << P << "\nexpected=\n" << expected;
+        << "shear " << g << "\nP=\n"
+        << P << "\nexpected=\n"
+        << expected;
   }
 }
 
-// ---- Model-specific facts ------------------------------------------------------------------------
+// ---- Model-specific facts
+// ------------------------------------------------------------------------
 TEST(MooneyRivlin, ShearModulusIsTwiceC1PlusC2) {
   const MooneyRivlin m = mr();
   EXPECT_NEAR(linearized_moduli(m).mu, 2 * (m.C1 + m.C2), 1e-9);
@@ -239,7 +271,8 @@ struct PrintedVeronda {
   InvariantDerivatives evaluate(const Invariants& inv) const {
     const double I3 = inv.J * inv.J;
     InvariantDerivatives e;
-    e.psi = 2 * alpha * std::exp(inv.I1 - 3) + alpha * beta * (inv.I2 - 3) + a * I3 - a * std::log(I3);
+    e.psi =
+        2 * alpha * std::exp(inv.I1 - 3) + alpha * beta * (inv.I2 - 3) + a * I3 - a * std::log(I3);
     e.d(kI1) = 2 * alpha * std::exp(inv.I1 - 3);
     e.d(kI2) = alpha * beta;
     e.d(kJ) = 2 * a * inv.J - 2 * a / inv.J;
@@ -251,7 +284,8 @@ TEST(Veronda, PrintedFormIsNotStressFreeAndTheCorrectionIs) {
   const Veronda v = veronda();
   const PrintedVeronda printed{v.alpha, v.beta, v.a};
   const Mat3 P_printed = first_piola(printed, Mat3::Identity());
-  EXPECT_LE((P_printed - 4 * v.alpha * (1 + v.beta) * Mat3::Identity()).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_LE((P_printed - 4 * v.alpha * (1 + v.beta) * Mat3::Identity()).cwiseAbs().maxCoeff(),
+            1e-9);
   EXPECT_LE(first_piola(v, Mat3::Identity()).cwiseAbs().maxCoeff(), 1e-9);
   // The correction only changes the volumetric part: deviatoric shear response is identical.
   Mat3 F = Mat3::Identity();
