@@ -243,6 +243,7 @@ void read_solver(JsonObject s, Scene& scene) {
   o.max_settle_steps = s.integer("max_settle_steps", o.max_settle_steps);
   scene.quasi_viscosity = s.number("quasi_viscosity", 0.0);
   scene.tolerance = s.number("tolerance", scene.tolerance);
+  scene.ramp_body_loads = s.boolean("ramp_body_loads", scene.ramp_body_loads);
   if (!(o.min_increment > 0 && o.min_increment <= o.initial_increment && o.initial_increment <= 1 &&
         o.max_increment >= o.initial_increment)) {
     s.fail(

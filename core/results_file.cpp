@@ -39,6 +39,7 @@ struct ResultsFile::State {
   std::string h5_name;   ///< file name of the results file, as the sidecar refers to it
   Index num_nodes = 0, num_tets = 0, num_constraints = 0;
   std::vector<SidecarStep> steps;
+  std::vector<std::string> contact_names;  ///< of the first step; later steps must match
 
   void write_sidecar() const {
     write_file_atomically(xmf_path, xdmf_text(h5_name, num_nodes, num_tets, steps));
@@ -91,7 +92,7 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
 
 ResultsFile::~ResultsFile() = default;
 
-void ResultsFile::append_step(const StepRecord& step) {
+void ResultsFile::append_step(const StepRecord& step, const Points& x, const Points* v) {
   State& s = *state_;
   const H5File& f = s.file;
   const std::string group = step_group(step.index);
@@ -103,30 +104,51 @@ void ResultsFile::append_step(const StepRecord& step) {
   };
   if (step.index < 0 || step.index > 999999)
     f.fail("step index " + std::to_string(step.index) + " is outside 0..999999");
-  if (!step.x) f.fail(group + ": no positions x given");
-  expect_rows("x", step.x->rows(), s.num_nodes, "#nodes");
-  if (step.v) expect_rows("v", step.v->rows(), s.num_nodes, "#nodes");
+  expect_rows("x", x.rows(), s.num_nodes, "#nodes");
+  if (v) expect_rows("v", v->rows(), s.num_nodes, "#nodes");
   expect_rows("reactions", step.reactions.rows(), s.num_constraints, "#constraints");
+  std::vector<std::string> contact_names;
+  for (const InterfaceForce& c : step.contact) contact_names.push_back(c.name);
+  if (!s.steps.empty() && contact_names != s.contact_names)
+    f.fail(group + ": the contact interfaces differ from those of the first step");
   if (f.exists(group)) f.fail(group + " was already written");
 
+  if (s.steps.empty() && !contact_names.empty()) {
+    f.write_strings("/run/contact_names", contact_names);
+    s.contact_names = contact_names;
+  }
   f.create_group(group);
   f.set_attribute(group, "index", step.index);
   f.set_attribute(group, "load", step.load);
+  f.set_attribute(group, "settling", std::int32_t(step.settling));
   f.set_attribute(group, "newton_iterations", step.newton_iterations);
   f.set_attribute(group, "linear_iterations", step.linear_iterations);
   f.set_attribute(group, "energy", step.energy);
+  if (v) f.set_attribute(group, "kinetic_energy", step.kinetic_energy);
   f.set_attribute(group, "seconds", step.seconds);
-  if (step.contact_area) f.set_attribute(group, "contact_area", *step.contact_area);
-  if (step.contact_force) f.set_attribute(group, "contact_force", *step.contact_force);
-  f.write_array(group + "/x", *step.x);
-  if (step.v) f.write_array(group + "/v", *step.v);
+  f.write_array(group + "/x", x);
+  if (v) f.write_array(group + "/v", *v);
   f.write_array(
       group + "/residuals",
       Eigen::Map<const VectorX>(step.residuals.data(), Eigen::Index(step.residuals.size())));
   f.write_array(group + "/reactions", step.reactions);
+  if (!step.contact.empty()) {
+    const Eigen::Index rows = Eigen::Index(step.contact.size());
+    Eigen::Matrix<double, Eigen::Dynamic, 3> forces(rows, 3);
+    VectorX magnitudes(rows), areas(rows);
+    for (Eigen::Index k = 0; k < rows; ++k) {
+      forces.row(k) = step.contact[k].force.transpose();
+      magnitudes(k) = step.contact[k].magnitude;
+      areas(k) = step.contact[k].area;
+    }
+    f.set_attribute(group, "contact_area", step.contact_area());
+    f.write_array(group + "/contact_forces", forces);
+    f.write_array(group + "/contact_force_magnitudes", magnitudes);
+    f.write_array(group + "/contact_areas", areas);
+  }
   f.flush();
 
-  s.steps.push_back({step_name(step.index), group, step.load, step.v != nullptr});
+  s.steps.push_back({step_name(step.index), group, step.load, v != nullptr});
   s.write_sidecar();
 }
 

@@ -2,6 +2,7 @@
 // Helpers for tests that run the scenes of apps/scenes.
 
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,13 @@ inline Scene load(const std::string& name, const std::vector<std::string>& overr
   std::vector<Override> o;
   for (const std::string& s : overrides) o.push_back(parse_override(s));
   return load_scene(scene_path(name), o);
+}
+
+/// The contact row named `name` of a step (a failed test when there is none).
+inline const InterfaceForce& interface(const StepRecord& step, const std::string& name) {
+  for (const InterfaceForce& f : step.contact)
+    if (f.name == name) return f;
+  throw std::runtime_error("step " + std::to_string(step.index) + " has no contact row " + name);
 }
 
 inline RunResult run(const Scene& scene, const std::string& out = "") {

@@ -73,7 +73,7 @@ TEST(DynamicScenes, EveryIntegratorHonoursDirichletConditionsExactly) {
     const std::vector<Index>& face = s.constraints[0].nodes;
     double worst = 0, free_motion = 0;
     RunOptions options;
-    options.observer = [&](const StepSummary& st, const Points& x) {
+    options.observer = [&](const StepRecord& st, const Points& x) {
       const Vec3 u = Vec3(0.01, 0.02, 0.03) * (st.load / 0.002);
       for (Index i : face)
         worst = std::max(worst, (x.row(i) - s.mesh.X.row(i) - u.transpose()).norm());
@@ -108,8 +108,8 @@ TEST(DynamicScenes, SymplecticEulerRefusesUnstableStepsAndKeepsEnergyBounded) {
   const VectorX m = lumped_mass(s.mesh.X, s.mesh.tets, s.tet_density);
   const double initial = -(m.transpose() * (s.mesh.X * s.gravity)).value();
   double deviation = 0, kinetic = 0;
-  for (const StepSummary& st : r.steps) {
-    deviation = std::max(deviation, std::abs(st.kinetic_energy + st.potential_energy - initial));
+  for (const StepRecord& st : r.steps) {
+    deviation = std::max(deviation, std::abs(st.kinetic_energy + st.energy - initial));
     kinetic = std::max(kinetic, st.kinetic_energy);
   }
   EXPECT_GT(kinetic, 1.0);
@@ -128,7 +128,7 @@ TEST(DynamicScenes, ImplicitEulerEnergyDecreasesMonotonically) {
   double previous = -(m.transpose() * (s.mesh.X * s.gravity)).value();
   const double initial = previous;
   for (size_t k = 0; k < r.steps.size(); ++k) {
-    const double e = r.steps[k].kinetic_energy + r.steps[k].potential_energy;
+    const double e = r.steps[k].kinetic_energy + r.steps[k].energy;
     EXPECT_LE(e, previous + 1e-9 * std::abs(previous)) << "step " << k;
     previous = e;
   }
@@ -150,9 +150,9 @@ TEST(DynamicScenes, NewmarkKeepsTheEnergyImplicitEulerDissipates) {
     const VectorX m = lumped_mass(s.mesh.X, s.mesh.tets, s.tet_density);
     const double initial = -(m.transpose() * (s.mesh.X * s.gravity)).value();
     double kinetic = 0;
-    for (const StepSummary& st : r.steps) {
+    for (const StepRecord& st : r.steps) {
       kinetic = std::max(kinetic, st.kinetic_energy);
-      lost[k] = std::max(lost[k], std::abs(st.kinetic_energy + st.potential_energy - initial));
+      lost[k] = std::max(lost[k], std::abs(st.kinetic_energy + st.energy - initial));
     }
     lost[k] /= kinetic;
   }
@@ -257,9 +257,9 @@ TEST(DynamicScenes, BarsDropOntoTheFloorAndOntoEachOther) {
   double lowest = std::numeric_limits<double>::infinity(), rise = 0, previous = 0;
   bool first = true;
   RunOptions options;
-  options.observer = [&](const StepSummary& st, const Points& x) {
+  options.observer = [&](const StepRecord& st, const Points& x) {
     lowest = std::min(lowest, x.col(2).minCoeff());
-    const double e = st.kinetic_energy + st.potential_energy;
+    const double e = st.kinetic_energy + st.energy;
     if (!first) rise = std::max(rise, e - previous);
     previous = e;
     first = false;
