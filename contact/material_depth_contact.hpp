@@ -49,7 +49,8 @@ class MaterialDepthContact final : public ForceModule {
   double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
   /// One row per interface (ContactInterfaces): every pair of bodies "a/b" and, with
   /// self-contact, every body against itself "a (self)"; areas are those of the clipped
-  /// triangles.
+  /// triangles. Each pair also adds its force, area and depth integral to its triangle in
+  /// step.surface.
   void report(const Points& x, StepRecord& step) const override;
 
   const std::vector<ContactPair>& pairs() const { return pairs_; }
