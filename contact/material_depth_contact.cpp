@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <algorithm>
 #include <functional>
 
 #include "contact/contact_surface.hpp"
@@ -166,8 +167,24 @@ void MaterialDepthContact::report(const Points& x, StepRecord& step) const {
   });
   ContactInterfaces::Tally tally = interfaces_.tally(step);
   step.surface.resize(static_cast<Index>(tris_.rows()));
+  // A triangle's pairs are consecutive; their forces are netted per body the triangle enters, so
+  // that splitting a triangle among tets adds no force: the in-plane pulls of the pieces cancel.
+  struct Share {
+    Index body;
+    Vec3 force;
+    PolygonMoments moments;
+  };
+  std::vector<Share> shares;
+  const auto flush = [&](Index tri) {
+    for (const Share& s : shares) {
+      add_to_surface(step.surface, tri, s.force, s.moments);
+      tally.add(tri_body_(tri), s.body, s.force, s.moments.area);
+    }
+    shares.clear();
+  };
   for (Index k = 0; k < n; ++k) {  // in pair order: the same sums for any number of threads
     const ContactPair& p = pairs_[k];
+    if (k > 0 && p.tri != pairs_[k - 1].tri) flush(pairs_[k - 1].tri);
     // The penalty pushes the triangle out of the tet: -grad W on the triangle's side.
     const Vec3 on_triangle = -gradients[k].tail<9>().reshaped(3, 3).rowwise().sum();
     // Material depth at the polygon's vertices: the tet's linear depth field g0 + a . (R - P0).
@@ -179,9 +196,15 @@ void MaterialDepthContact::report(const Points& x, StepRecord& step) const {
     for (int j = 0; j < p.polygon.size; ++j)
       G[j] = g[0] + slope.dot(make_point<double>(p.polygon.x[j], 0) - P[0]);
     const PolygonMoments moments = polygon_moments(p.polygon, G);
-    add_to_surface(step.surface, p.tri, on_triangle, moments);
-    tally.add(tri_body_(p.tri), tet_body_(p.tet), on_triangle, moments.area);
+    const Index body = tet_body_(p.tet);
+    auto share =
+        std::find_if(shares.begin(), shares.end(), [&](const Share& s) { return s.body == body; });
+    if (share == shares.end()) share = shares.insert(shares.end(), {body, Vec3::Zero(), {}});
+    share->force += on_triangle;
+    share->moments.area += moments.area;
+    share->moments.depth_integral += moments.depth_integral;
   }
+  if (n > 0) flush(pairs_[n - 1].tri);
   tally.finish();
 }
 

@@ -14,9 +14,10 @@ namespace depthfem {
 struct InterfaceForce {
   std::string name;           ///< "femur/patella", "skin (self)", "obstacle floor"
   Vec3 force = Vec3::Zero();  ///< [N] on the first-named body (see the module's docs)
-  /// [N] the pair forces summed as magnitudes, each contact surface counted once: |force| where
-  /// the pressure points one way, and for self-contact (whose net force is internal and
-  /// cancels) the force pressed across the fold.
+  /// [N] the forces on the penetrating boundary triangles (netted per triangle) summed as
+  /// magnitudes, each contact surface counted once: |force| where the pressure points one way,
+  /// and for self-contact (whose net force is internal and cancels) the force pressed across
+  /// the fold. It is the integral of the contact pressure over the interface's triangles.
   double magnitude = 0;
   double area = 0;  ///< [m^2] of surface in contact, each contact surface counted once
 };
@@ -29,7 +30,9 @@ struct SurfaceContact {
   /// #tris x 3 [N]: force on the triangle's body through the triangle's pairs. Body-to-body
   /// contact is found from both sides, so each of two touching surfaces carries a share.
   Eigen::Matrix<double, Eigen::Dynamic, 3> force;
-  VectorX magnitude;       ///< #tris [N]: the pairs' force magnitudes summed
+  /// #tris [N]: the magnitudes of the triangle's net force per body or obstacle it enters,
+  /// summed (|force| where it enters one)
+  VectorX magnitude;
   VectorX area;            ///< #tris [m^2]: area of the triangle inside what it penetrates
   VectorX depth_integral;  ///< #tris [m^3]: penetration depth integrated over that area
 
