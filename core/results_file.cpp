@@ -166,6 +166,7 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
   f.write_array("/mesh/tris", mesh.tris);
   f.write_array("/mesh/tet_body", mesh.tet_body);
   f.write_array("/mesh/tri_body", mesh.tri_body);
+  f.write_array("/mesh/tri_tet", mesh.tri_tet);
   if (depth.size() != 0) f.write_array("/mesh/depth", depth);
   std::vector<std::string> body_names;
   for (const Body& body : mesh.bodies) body_names.push_back(body.name);

@@ -4,7 +4,7 @@
 /// tests and the tools need. apps/README.md documents every dataset (name, shape, units).
 ///
 /// Layout (datasets row-major; strings variable-length UTF-8):
-///   /mesh: X, tets, tris, tet_body, tri_body, body_names, body_materials, depth (with
+///   /mesh: X, tets, tris, tet_body, tri_body, tri_tet, body_names, body_materials, depth (with
 ///   material-depth contact only); with several bodies also blocks/<b>/tets (body-local node
 ///   indices) and blocks/<b>/depth (a view);
 ///   /run attributes scene, version, threads, analysis, status ("running", "completed",

@@ -256,6 +256,8 @@ TEST_F(ResultsFileTest, RoundTripOfMeshRunStepsAndTiming) {
   EXPECT_EQ(raw.values<int>("/mesh/tet_body", H5T_NATIVE_INT, dims), std::vector<int>(12, 0));
   EXPECT_EQ(raw.values<int>("/mesh/tri_body", H5T_NATIVE_INT, dims),
             std::vector<int>(f_.mesh.num_tris(), 0));
+  EXPECT_EQ(raw.values<int>("/mesh/tri_tet", H5T_NATIVE_INT, dims),
+            std::vector<int>(f_.mesh.tri_tet.begin(), f_.mesh.tri_tet.end()));
   EXPECT_EQ(raw.doubles("/mesh/depth"), std::vector<double>(f_.depth.begin(), f_.depth.end()));
   EXPECT_EQ(raw.strings("/mesh/body_names"), std::vector<std::string>({"block"}));
   EXPECT_EQ(raw.strings("/mesh/body_materials"), std::vector<std::string>({"mooney_rivlin"}));
