@@ -78,6 +78,8 @@ SurfaceFields surface_fields(const TriIndices& tris, const Points& x, const Surf
 std::vector<StepValue> step_values(const StepRecord& step, bool velocity,
                                    const std::vector<std::string>& constraint_names) {
   std::vector<StepValue> out{{"step", {double(step.index)}},
+                             {"load", {step.load}},
+                             {"settling", {double(step.settling)}},
                              {"newton_iterations", {double(step.newton_iterations)}},
                              {"linear_iterations", {double(step.linear_iterations)}},
                              {"residual", {step.residuals.empty() ? 0.0 : step.residuals.back()}},
@@ -108,6 +110,7 @@ struct ResultsFile::State {
   std::vector<SidecarBlock> blocks;
   std::optional<XdmfSidecar> sidecar;
   Index num_steps = 0;
+  Index settling_steps = 0;
   std::vector<std::string> contact_names;  ///< of the first step; later steps must match
 
   Index num_nodes() const { return static_cast<Index>(X.rows()); }
@@ -154,6 +157,7 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
                                          info,
                                          sidecar_blocks(mesh, info.body_materials),
                                          {},
+                                         0,
                                          0,
                                          {}});
   State& s = *state_;
@@ -318,8 +322,9 @@ void ResultsFile::append_step(const StepRecord& step, const Points& x, const Poi
   s.write_block_views(group);
   f.flush();
   ++s.num_steps;
-  s.sidecar->append(
-      {group, step.load, step_values(step, fields.velocity, s.info.constraint_names)});
+  // ParaView shows one state per distinct time: settling steps, all at load 1, follow at 2, 3, ...
+  const double time = step.settling ? 1.0 + double(++s.settling_steps) : step.load;
+  s.sidecar->append({group, time, step_values(step, fields.velocity, s.info.constraint_names)});
 }
 
 void ResultsFile::write_timing(const std::vector<std::pair<std::string, double>>& phases) {

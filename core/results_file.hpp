@@ -19,7 +19,10 @@
 ///   with several bodies, blocks/<b>/ row views of the node and tet datasets;
 ///   /timing attributes, one f64 [s] per phase, in the order given.
 /// Views are HDF5 virtual datasets of rows of this file: they let the sidecar give every body
-/// its own grid, which ParaView's XDMF readers cannot cut out of the scene-wide arrays.
+/// its own grid, which ParaView's XDMF readers cannot cut out of the scene-wide arrays. The
+/// sidecar's time of a step is its load (time-dependent runs: its time); ParaView shows one
+/// state per distinct time, so the settling steps of a static run, all at load 1, get times
+/// 2, 3, ...
 
 #include <memory>
 #include <string>

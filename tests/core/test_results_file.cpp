@@ -138,7 +138,9 @@ struct Fixture {
                "static",
                2,
                {"bottom", "top"},
-               {"mooney_rivlin"}};
+               {"mooney_rivlin"},
+               {},
+               {}};
 };
 
 // Two bodies: "left" (12 tets) and "right" (a 2 x 1 x 1-cell box, 12 tets, 18 nodes).
@@ -450,7 +452,7 @@ TEST_F(ResultsFileTest, KilledWriterKeepsCompletedSteps) {
 TEST_F(ResultsFileTest, EveryBodyViewsItsOwnRows) {
   const fs::path path = dir_ / "bodies.h5";
   const Mesh mesh = two_bodies();
-  RunInfo info{"{}", "0.1.0", "static", 1, {}, {"neo_hookean", "rigid"}};
+  RunInfo info{"{}", "0.1.0", "static", 1, {}, {"neo_hookean", "rigid"}, {}, {}};
   info.fields.stress = info.fields.strain = true;
   const Points x = positions(mesh, 1);
   const ElementFields elements = element_values(mesh.num_tets(), 1);
@@ -495,7 +497,7 @@ TEST_F(ResultsFileTest, EveryBodyViewsItsOwnRows) {
 TEST_F(ResultsFileTest, XdmfSidecarStructure) {
   const fs::path path = dir_ / "sidecar.h5";
   const Mesh mesh = two_bodies();
-  RunInfo info{"{}", "0.1.0", "dynamic", 1, {"clamp"}, {"neo_hookean", "rigid"}};
+  RunInfo info{"{}", "0.1.0", "dynamic", 1, {"clamp"}, {"neo_hookean", "rigid"}, {}, {}};
   info.fields = {
       .velocity = true, .displacement = true, .stress = true, .strain = true, .contact = true};
   info.initial_velocity = Points::Zero(mesh.num_nodes(), 3);
@@ -530,9 +532,10 @@ TEST_F(ResultsFileTest, XdmfSidecarStructure) {
   EXPECT_EQ(count("<Grid Name=\"left (neo_hookean)\" GridType=\"Uniform\">"), 3u);
   EXPECT_EQ(count("<Grid Name=\"right (rigid)\" GridType=\"Uniform\">"), 3u);
   EXPECT_EQ(count("<Grid Name=\"boundary\" GridType=\"Uniform\">"), 3u);
-  // Per step: step, newton_iterations, linear_iterations, residual, energy, kinetic_energy, the
-  // reaction, the total contact area and three values per interface; none for the reference.
-  EXPECT_EQ(count("Center=\"Grid\""), 2u * 14);
+  // Per step: step, load, settling, newton_iterations, linear_iterations, residual, energy,
+  // kinetic_energy, the reaction, the total contact area and three values per interface; none
+  // for the reference.
+  EXPECT_EQ(count("Center=\"Grid\""), 2u * 16);
   EXPECT_EQ(count("<Attribute Name=\"energy\" AttributeType=\"Scalar\" Center=\"Grid\"><DataItem "
                   "Dimensions=\"1\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">1<"),
             1u);
@@ -572,6 +575,28 @@ TEST_F(ResultsFileTest, XdmfSidecarStructure) {
         texts[k - 1].substr(0, texts[k - 1].rfind("    </Grid>\n  </Domain>"));
     EXPECT_EQ(texts[k].compare(0, before.size(), before), 0) << "step " << k << " rewrote the file";
   }
+}
+
+// ParaView shows one state per distinct time: the settling steps of a static run, all at load 1,
+// follow the loading at times 2, 3, ... (their load stays 1 in the file and the field data).
+TEST_F(ResultsFileTest, SettlingStepsGetTimesOfTheirOwn) {
+  const fs::path path = dir_ / "settle.h5";
+  {
+    ResultsFile file(path, f_.mesh, f_.depth, f_.info);
+    for (int k = 1; k <= 4; ++k) {
+      StepRecord s = step_record(k);
+      s.load = k == 1 ? 0.5 : 1.0;
+      s.settling = k > 2;
+      file.append_step(s, positions(f_.mesh, k), nullptr);
+    }
+  }
+  const std::string xmf = read_text(dir_ / "settle.xmf");
+  std::vector<std::string> times;
+  const std::regex time(R"re(<Time Value="([^"]+)"/>)re");
+  for (std::sregex_iterator m(xmf.begin(), xmf.end(), time), end; m != end; ++m)
+    times.push_back((*m)[1]);
+  EXPECT_EQ(times, std::vector<std::string>({"0", "0.5", "1", "2", "3"}));
+  EXPECT_EQ(RawFile(path).attribute<double>("/steps/000004", "load", H5T_NATIVE_DOUBLE), 1.0);
 }
 
 TEST_F(ResultsFileTest, RejectsStepsThatDoNotMatchTheRun) {
