@@ -17,6 +17,7 @@
 #include "core/mesh_generators.hpp"
 #include "core/results_file.hpp"
 #include "integrators/element_fields.hpp"
+#include "integrators/system.hpp"
 
 namespace depthfem {
 namespace {
@@ -107,21 +108,16 @@ void BM_ElementFields(benchmark::State& state) {
       benchmark::Counter(double(b.mesh.num_tets()), benchmark::Counter::kIsIterationInvariantRate);
 }
 
-// The yardstick: one elastic assembly (energy, gradient, Hessian), on one thread.
+// The yardstick: one elastic assembly (energy, gradient, Hessian), as a Newton iteration does it
+// through the System, on one thread.
 void BM_Assembly(benchmark::State& state) {
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
   const Box& b = box();
-  Elasticity e(b.mesh.X, b.mesh.tets, b.groups);
-  SparsityBuilder builder(b.mesh.num_nodes());
-  e.add_couplings(builder);
-  BlockSparseMatrix H(builder);
-  e.bind(H);
-  VectorX g(3 * b.mesh.num_nodes());
-  for (auto _ : state) {
-    g.setZero();
-    H.set_zero();
-    benchmark::DoNotOptimize(e.evaluate(b.x, &g, &H));
-  }
+  PhaseTimers timers;
+  System system(b.mesh.num_nodes(), timers);
+  system.add(std::make_unique<Elasticity>(b.mesh.X, b.mesh.tets, b.groups));
+  VectorX g;
+  for (auto _ : state) benchmark::DoNotOptimize(system.hessian(b.x, g));
 }
 
 // CPU time of the process (user and system: the writes), which other jobs on the machine
