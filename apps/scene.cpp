@@ -52,10 +52,25 @@ TetMesh read_body_mesh(JsonObject m, const std::string& scene_dir) {
 MaterialModel read_material(JsonObject m, Vec3& fiber_direction) {
   const std::string model = m.string("model");
   MaterialModel out;
-  const auto mooney = [&] { return MooneyRivlin{m.number("C1"), m.number("C2"), m.number("a")}; };
+  // Young's modulus and Poisson's ratio are converted by the model; its range errors are
+  // reported at the key.
+  const auto elastic_constants = [&](auto convert) {
+    const double E = m.number("youngs"), nu = m.number("poisson");
+    try {
+      return convert(E, nu);
+    } catch (const std::invalid_argument& e) {
+      m.fail("youngs", e.what());
+    }
+  };
+  const auto mooney = [&] {
+    if (!m.has("youngs")) return MooneyRivlin{m.number("C1"), m.number("C2"), m.number("a")};
+    const double C2 = m.number("C2", 0.0);
+    return elastic_constants(
+        [&](double E, double nu) { return MooneyRivlin::from_youngs(E, nu, C2); });
+  };
   const auto veronda = [&] { return Veronda{m.number("alpha"), m.number("beta"), m.number("a")}; };
   if (model == "neo_hookean") {
-    out = m.has("youngs") ? NeoHookean::from_youngs(m.number("youngs"), m.number("poisson"))
+    out = m.has("youngs") ? elastic_constants(NeoHookean::from_youngs)
                           : NeoHookean{m.number("mu"), m.number("lambda")};
   } else if (model == "mooney_rivlin") {
     out = mooney();
@@ -194,6 +209,21 @@ void read_dynamic(JsonObject d, Scene& scene) {
       d.fail("integrator", "a quasistatic analysis uses implicit_euler");
     scene.viscosity = d.number("viscosity");
     if (!(scene.viscosity > 0)) d.fail("viscosity", "must be > 0");
+  }
+  o.mass = d.choice<MassMatrix>(
+      "mass", "mass matrix",
+      {{"lumped", MassMatrix::kLumped}, {"consistent", MassMatrix::kConsistent}});
+  if (o.mass == MassMatrix::kConsistent && explicit_scheme)
+    d.fail("mass", "a consistent mass matrix needs an implicit integrator");
+  if (d.has("newmark")) {
+    if (o.integrator != Integrator::kNewmark)
+      d.fail("newmark", "only for \"integrator\": \"newmark\"");
+    JsonObject n = d.object("newmark");
+    o.newmark.beta = n.number("beta", o.newmark.beta);
+    o.newmark.gamma = n.number("gamma", o.newmark.gamma);
+    if (!(o.newmark.beta > 0 && o.newmark.beta <= 0.5)) n.fail("beta", "must be in (0, 0.5]");
+    if (!(o.newmark.gamma >= 0.5 && o.newmark.gamma <= 1)) n.fail("gamma", "must be in [0.5, 1]");
+    n.finish();
   }
   if (d.has("damping")) {
     JsonObject c = d.object("damping");
