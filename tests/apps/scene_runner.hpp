@@ -1,14 +1,25 @@
 #pragma once
 // Helpers for tests that run the scenes of apps/scenes.
 
+#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include "apps/run_scene.hpp"
 
 namespace depthfem::testing {
+
+/// A path in the temporary folder unique to this process (tests of one suite run in parallel
+/// processes, and several checkouts may test at once).
+inline std::string temp_path(const std::string& name) {
+  return (std::filesystem::temp_directory_path() /
+          ("depthfem_" + std::to_string(getpid()) + "_" + name))
+      .string();
+}
 
 inline std::string scene_path(const std::string& name) {
   return std::string(DEPTHFEM_SOURCE_DIR) + "/apps/scenes/" + name + ".json";

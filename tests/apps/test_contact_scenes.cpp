@@ -70,8 +70,7 @@ TEST(ContactScenes, SlidingBlockConvergesAtEveryStep) {
 // deformable block: its nodes follow the prescribed motion exactly, and the block's base carries
 // the contact force.
 TEST(ContactScenes, RigidBodyWithPrescribedMotionPressesADeformableBlock) {
-  const std::string path =
-      (std::filesystem::temp_directory_path() / "depthfem_rigid_press.json").string();
+  const std::string path = testing::temp_path("rigid_press.json");
   std::ofstream(path) << R"({
     "bodies": [
       {"name": "block", "mesh": {"generator": "box", "lo": [0, 0, 0], "hi": [1, 1, 0.3], "cells": [5, 5, 3]},

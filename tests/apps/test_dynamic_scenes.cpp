@@ -27,8 +27,7 @@ using testing::run;
 // x_0 + t v_0 + g t^2 / 2. With the consistent mass matrix, whose rows sum to the lumped masses
 // that carry gravity, the uniform acceleration g still balances the weight exactly.
 TEST(DynamicScenes, FreeFallFollowsTheDiscreteSolutionOfEachIntegrator) {
-  const std::string path =
-      (std::filesystem::temp_directory_path() / "depthfem_free_fall.json").string();
+  const std::string path = testing::temp_path("free_fall.json");
   std::ofstream(path) << R"({
     "analysis": "dynamic", "gravity": [0, 0, -9.81],
     "bodies": [{"name": "b", "mesh": {"generator": "box", "lo": [0, 0, 0], "hi": [0.3, 0.2, 0.1], "cells": [3, 2, 1]},
@@ -66,8 +65,7 @@ TEST(DynamicScenes, FreeFallFollowsTheDiscreteSolutionOfEachIntegrator) {
 // Prescribed motion holds exactly at every step of every integrator: the face x = 0 of a falling
 // box is displaced linearly in time (u t / duration) while the rest moves freely.
 TEST(DynamicScenes, EveryIntegratorHonoursDirichletConditionsExactly) {
-  const std::string path =
-      (std::filesystem::temp_directory_path() / "depthfem_prescribed.json").string();
+  const std::string path = testing::temp_path("prescribed.json");
   std::ofstream(path) << R"({
     "analysis": "dynamic", "gravity": [0, 0, -9.81],
     "bodies": [{"name": "b", "mesh": {"generator": "box", "lo": [0, 0, 0], "hi": [0.3, 0.2, 0.1], "cells": [3, 2, 1]},
@@ -214,8 +212,7 @@ TEST(DynamicScenes, ClampedBarVibratesAtTheBeamTheoryPeriod) {
   const double E = 1e8, rho = 1000, H = 0.1, L = 1.0;
   const double beam =
       2 * std::numbers::pi / (1.8751 * 1.8751 * std::sqrt(E * H * H / (12 * rho * std::pow(L, 4))));
-  const std::string out =
-      (std::filesystem::temp_directory_path() / "depthfem_vibration.h5").string();
+  const std::string out = testing::temp_path("vibration.h5");
   double error[2];
   for (int k = 0; k < 2; ++k) {
     const Scene s =

@@ -4,6 +4,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include <unistd.h>
+
 #include "apps/scene.hpp"
 #include "core/error.hpp"
 
@@ -12,7 +14,9 @@ namespace {
 
 class SceneFileTest : public ::testing::Test {
  protected:
-  std::filesystem::path dir = std::filesystem::temp_directory_path() / "depthfem_scene_test";
+  // One folder per test process: ctest runs the tests of this suite in parallel processes.
+  std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("depthfem_scene_test_" + std::to_string(getpid()));
   void SetUp() override { std::filesystem::create_directories(dir); }
   void TearDown() override { std::filesystem::remove_all(dir); }
 
