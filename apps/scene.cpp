@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <optional>
 #include <sstream>
 
 #include "apps/json_reader.hpp"
@@ -190,6 +191,14 @@ Obstacle read_obstacle(JsonObject o, size_t index) {
   return out;
 }
 
+// The options of one integrator ("newmark": {...}, "arkode": {...}), keyed by its name; an
+// error when the scene chose another integrator.
+std::optional<JsonObject> integrator_section(JsonObject& d, const char* integrator, bool chosen) {
+  if (!d.has(integrator)) return std::nullopt;
+  if (!chosen) d.fail(integrator, std::string("only for \"integrator\": \"") + integrator + "\"");
+  return d.object(integrator);
+}
+
 void read_dynamic(JsonObject d, Scene& scene) {
   DynamicOptions& o = scene.dynamic_options;
   o.integrator = d.choice<Integrator>("integrator", "integrator",
@@ -215,10 +224,9 @@ void read_dynamic(JsonObject d, Scene& scene) {
       {{"lumped", MassMatrix::kLumped}, {"consistent", MassMatrix::kConsistent}});
   if (o.mass == MassMatrix::kConsistent && explicit_scheme)
     d.fail("mass", "a consistent mass matrix needs an implicit integrator");
-  if (d.has("newmark")) {
-    if (o.integrator != Integrator::kNewmark)
-      d.fail("newmark", "only for \"integrator\": \"newmark\"");
-    JsonObject n = d.object("newmark");
+  if (std::optional<JsonObject> section =
+          integrator_section(d, "newmark", o.integrator == Integrator::kNewmark)) {
+    JsonObject& n = *section;
     o.newmark.beta = n.number("beta", o.newmark.beta);
     o.newmark.gamma = n.number("gamma", o.newmark.gamma);
     if (!(o.newmark.beta > 0 && o.newmark.beta <= 0.5)) n.fail("beta", "must be in (0, 0.5]");
@@ -235,10 +243,9 @@ void read_dynamic(JsonObject d, Scene& scene) {
       c.fail("stiffness", "needs an implicit integrator");
     c.finish();
   }
-  if (d.has("arkode")) {
-    if (o.integrator != Integrator::kArkode)
-      d.fail("arkode", "only for \"integrator\": \"arkode\"");
-    JsonObject a = d.object("arkode");
+  if (std::optional<JsonObject> section =
+          integrator_section(d, "arkode", o.integrator == Integrator::kArkode)) {
+    JsonObject& a = *section;
     o.arkode.order = a.integer("order", o.arkode.order);
     o.arkode.relative_tolerance = a.number("relative_tolerance", o.arkode.relative_tolerance);
     o.arkode.absolute_tolerance = a.number("absolute_tolerance", o.arkode.absolute_tolerance);
