@@ -102,8 +102,9 @@ void ResultsFile::append_step(const StepRecord& step, const Points& x, const Poi
       f.fail(group + ": " + name + " has " + std::to_string(rows) + " rows, expected " +
              std::to_string(expected) + " (" + of + ")");
   };
-  if (step.index < 0 || step.index > 999999)
-    f.fail("step index " + std::to_string(step.index) + " is outside 0..999999");
+  if (step.index < 0 || step.index > kMaxStepIndex)
+    f.fail("step index " + std::to_string(step.index) + " is outside 0.." +
+           std::to_string(kMaxStepIndex));
   expect_rows("x", x.rows(), s.num_nodes, "#nodes");
   if (v) expect_rows("v", v->rows(), s.num_nodes, "#nodes");
   expect_rows("reactions", step.reactions.rows(), s.num_constraints, "#constraints");
