@@ -1,10 +1,144 @@
 #include "apps/json_reader.hpp"
 
 #include <cmath>
+#include <cstdint>
+#include <limits>
+#include <optional>
 
 #include "core/error.hpp"
 
 namespace depthfem {
+
+namespace {
+
+using nlohmann::json;
+
+// Rejects text that is too large or too deeply nested, before the parser sees it: counts the
+// brackets outside strings.
+void check_size_and_depth(const std::string& text, const std::string& where) {
+  if (text.size() > kMaxJsonBytes) {
+    throw InputError(where + ": " + std::to_string(text.size()) + " bytes, more than the " +
+                     std::to_string(kMaxJsonBytes) + " a scene may have");
+  }
+  int depth = 0;
+  long line = 1;
+  bool in_string = false, escaped = false;
+  for (const char c : text) {
+    if (c == '\n') ++line;
+    if (in_string) {
+      if (escaped) {
+        escaped = false;
+      } else if (c == '\\') {
+        escaped = true;
+      } else if (c == '"') {
+        in_string = false;
+      }
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxJsonDepth) {
+        throw InputError(located(
+            where, line, "nested more than " + std::to_string(kMaxJsonDepth) + " levels deep"));
+      }
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+}
+
+// Where the parser is, for messages: one entry per open object or array.
+struct Frame {
+  bool object;
+  std::set<std::string> keys;  // objects: keys seen so far
+  std::string key;             // objects: the key being read
+  size_t index = 0;            // arrays: the element being read
+};
+
+std::string path_of(const std::vector<Frame>& frames) {
+  std::string path;
+  for (const Frame& f : frames) {
+    if (f.object) {
+      path += (path.empty() ? "" : ".") + f.key;
+    } else {
+      path += "[" + std::to_string(f.index) + "]";
+    }
+  }
+  return path;
+}
+
+// An integer JSON value as 64 bits (none for other values and unsigned ones above 2^63).
+std::optional<std::int64_t> as_int64(const json& v) {
+  if (v.is_number_unsigned()) {
+    const auto u = v.get<std::uint64_t>();
+    if (u > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max())) return {};
+    return static_cast<std::int64_t>(u);
+  }
+  if (v.is_number_integer()) return v.get<std::int64_t>();
+  return {};
+}
+
+// The int held by `v`, read for `key` of `o`; `context` is the value shown when `v` is no integer.
+int to_int(const JsonObject& o, const std::string& key, const json& v, const std::string& expected,
+           const json& context) {
+  const std::optional<std::int64_t> i = as_int64(v);
+  if (!i) o.fail(key, "expected " + expected + ", found " + shown(context));
+  if (*i < std::numeric_limits<int>::min() || *i > std::numeric_limits<int>::max())
+    o.fail(key, "integer " + shown(v) + " is out of range (at most 2147483647 in magnitude)");
+  return static_cast<int>(*i);
+}
+
+}  // namespace
+
+json parse_json(const std::string& text, const std::string& where) {
+  check_size_and_depth(text, where);
+  std::vector<Frame> frames;
+  // A child value finished: the next element of an enclosing array.
+  const auto advance = [&] {
+    if (!frames.empty() && !frames.back().object) ++frames.back().index;
+  };
+  const json::parser_callback_t track = [&](int, json::parse_event_t event, json& parsed) {
+    switch (event) {
+      case json::parse_event_t::object_start:
+        frames.push_back({true, {}, {}, 0});
+        break;
+      case json::parse_event_t::array_start:
+        frames.push_back({false, {}, {}, 0});
+        break;
+      case json::parse_event_t::key: {
+        Frame& f = frames.back();
+        f.key = parsed.get<std::string>();
+        if (!f.keys.insert(f.key).second)
+          throw InputError(where + ": " + path_of(frames) + ": duplicate key");
+        break;
+      }
+      case json::parse_event_t::object_end:
+      case json::parse_event_t::array_end:
+        frames.pop_back();
+        advance();
+        break;
+      case json::parse_event_t::value:
+        advance();
+        break;
+    }
+    return true;
+  };
+  try {
+    return json::parse(text, track);
+  } catch (const json::parse_error& e) {
+    // "[json.exception.parse_error.101] parse error at line 3, column 5: syntax error ...":
+    // keep what follows the library's tag.
+    std::string what = e.what();
+    const size_t tag_end = what.find("] ");
+    if (tag_end != std::string::npos) what = what.substr(tag_end + 2);
+    throw InputError(where + ": invalid JSON: " + what);
+  }
+}
+
+std::string shown(const json& value) {
+  std::string text = value.dump(-1, ' ', false, json::error_handler_t::replace);
+  if (text.size() > 60) text = text.substr(0, 57) + "...";
+  return text;
+}
 
 JsonObject::JsonObject(const nlohmann::json& j, std::string path, std::string file)
     : j_(j), path_(std::move(path)), file_(std::move(file)) {
@@ -29,7 +163,7 @@ const nlohmann::json& JsonObject::at(const std::string& key) {
 
 double JsonObject::number(const std::string& key) {
   const nlohmann::json& v = at(key);
-  if (!v.is_number()) fail(key, "expected a number, found " + v.dump());
+  if (!v.is_number()) fail(key, "expected a number, found " + shown(v));
   const double d = v.get<double>();
   if (!std::isfinite(d)) fail(key, "expected a finite number");
   return d;
@@ -40,8 +174,7 @@ double JsonObject::number(const std::string& key, double fallback) {
 
 int JsonObject::integer(const std::string& key) {
   const nlohmann::json& v = at(key);
-  if (!v.is_number_integer()) fail(key, "expected an integer, found " + v.dump());
-  return v.get<int>();
+  return to_int(*this, key, v, "an integer", v);
 }
 int JsonObject::integer(const std::string& key, int fallback) {
   return has(key) ? integer(key) : (ignore(key), fallback);
@@ -50,13 +183,13 @@ int JsonObject::integer(const std::string& key, int fallback) {
 bool JsonObject::boolean(const std::string& key, bool fallback) {
   if (!has(key)) return fallback;
   const nlohmann::json& v = at(key);
-  if (!v.is_boolean()) fail(key, "expected true or false, found " + v.dump());
+  if (!v.is_boolean()) fail(key, "expected true or false, found " + shown(v));
   return v.get<bool>();
 }
 
 std::string JsonObject::string(const std::string& key) {
   const nlohmann::json& v = at(key);
-  if (!v.is_string()) fail(key, "expected a string, found " + v.dump());
+  if (!v.is_string()) fail(key, "expected a string, found " + shown(v));
   return v.get<std::string>();
 }
 std::string JsonObject::string(const std::string& key, const std::string& fallback) {
@@ -66,11 +199,11 @@ std::string JsonObject::string(const std::string& key, const std::string& fallba
 Vec3 JsonObject::vec3(const std::string& key) {
   const nlohmann::json& v = at(key);
   if (!v.is_array() || v.size() != 3)
-    fail(key, "expected an array of 3 numbers, found " + v.dump());
+    fail(key, "expected an array of 3 numbers, found " + shown(v));
   Vec3 out;
   for (int k = 0; k < 3; ++k) {
     if (!v[k].is_number() || !std::isfinite(v[k].get<double>()))
-      fail(key, "expected an array of 3 numbers, found " + v.dump());
+      fail(key, "expected an array of 3 numbers, found " + shown(v));
     out(k) = v[k].get<double>();
   }
   return out;
@@ -82,11 +215,10 @@ Vec3 JsonObject::vec3(const std::string& key, const Vec3& fallback) {
 Eigen::Vector3i JsonObject::int3(const std::string& key) {
   const nlohmann::json& v = at(key);
   if (!v.is_array() || v.size() != 3)
-    fail(key, "expected an array of 3 integers, found " + v.dump());
+    fail(key, "expected an array of 3 integers, found " + shown(v));
   Eigen::Vector3i out;
   for (int k = 0; k < 3; ++k) {
-    if (!v[k].is_number_integer()) fail(key, "expected an array of 3 integers, found " + v.dump());
-    out(k) = v[k].get<int>();
+    out(k) = to_int(*this, key, v[k], "an array of 3 integers", v);
   }
   return out;
 }
@@ -96,15 +228,17 @@ std::vector<Index> JsonObject::indices(const std::string& key) {
   if (!v.is_array()) fail(key, "expected an array of node indices");
   std::vector<Index> out;
   for (const auto& e : v) {
-    if (!e.is_number_integer()) fail(key, "expected an array of node indices, found " + e.dump());
-    out.push_back(e.get<Index>());
+    const std::optional<std::int64_t> i = as_int64(e);
+    if (!i || *i < 0 || *i > std::numeric_limits<Index>::max())
+      fail(key, "expected node indices in [0, 2147483647], found " + shown(e));
+    out.push_back(static_cast<Index>(*i));
   }
   return out;
 }
 
 JsonObject JsonObject::object(const std::string& key) {
   const nlohmann::json& v = at(key);
-  if (!v.is_object()) fail(key, "expected an object, found " + v.dump());
+  if (!v.is_object()) fail(key, "expected an object, found " + shown(v));
   return JsonObject(v, key_path(key), file_);
 }
 
@@ -115,7 +249,7 @@ std::vector<JsonObject> JsonObject::objects(const std::string& key) {
   for (size_t k = 0; k < v.size(); ++k) {
     const std::string p = key_path(key) + "[" + std::to_string(k) + "]";
     if (!v[k].is_object())
-      throw InputError(file_ + ": " + p + ": expected an object, found " + v[k].dump());
+      throw InputError(file_ + ": " + p + ": expected an object, found " + shown(v[k]));
     out.emplace_back(v[k], p, file_);
   }
   return out;

@@ -13,6 +13,19 @@
 
 namespace depthfem {
 
+/// Limits on JSON text, checked before parsing: scene files are small and shallow, and a parser
+/// fed megabytes of nesting would exhaust the stack or the memory.
+inline constexpr size_t kMaxJsonBytes = 16 << 20;
+inline constexpr int kMaxJsonDepth = 64;
+
+/// Parses JSON `text` strictly: at most kMaxJsonBytes and kMaxJsonDepth levels of nesting, no
+/// duplicate keys. Throws InputError "WHERE:LINE: ..." (size, depth, syntax) or "WHERE: KEY.PATH:
+/// duplicate key".
+nlohmann::json parse_json(const std::string& text, const std::string& where);
+
+/// One line showing a JSON value in a message: at most 60 characters, invalid UTF-8 replaced.
+std::string shown(const nlohmann::json& value);
+
 /// A JSON object being read. Keys read through it are marked; finish() rejects the rest.
 class JsonObject {
  public:
@@ -22,6 +35,7 @@ class JsonObject {
   bool has(const std::string& key) const { return j_.contains(key); }
   double number(const std::string& key);
   double number(const std::string& key, double fallback);
+  /// An integer that fits an int; larger ones are refused, never truncated.
   int integer(const std::string& key);
   int integer(const std::string& key, int fallback);
   bool boolean(const std::string& key, bool fallback);
@@ -30,6 +44,7 @@ class JsonObject {
   Vec3 vec3(const std::string& key);
   Vec3 vec3(const std::string& key, const Vec3& fallback);
   Eigen::Vector3i int3(const std::string& key);
+  /// An array of node indices, each in [0, 2^31).
   std::vector<Index> indices(const std::string& key);
   JsonObject object(const std::string& key);
   std::vector<JsonObject> objects(const std::string& key);

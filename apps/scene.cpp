@@ -1,16 +1,27 @@
 #include "apps/scene.hpp"
 
+#include <unistd.h>
+
+#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <numbers>
+#include <optional>
 #include <sstream>
+#include <string_view>
+#include <type_traits>
+#include <variant>
 
 #include "apps/json_reader.hpp"
+#include "apps/scene_model.hpp"
 #include "core/error.hpp"
+#include "core/lumped_mass.hpp"
 #include "core/mesh_file.hpp"
 #include "core/mesh_generators.hpp"
 #include "core/node_sets.hpp"
+#include "core/results_file.hpp"
 
 namespace depthfem {
 
@@ -18,44 +29,117 @@ namespace {
 
 using nlohmann::json;
 
-TetMesh read_body_mesh(JsonObject m, const std::string& scene_dir) {
-  TetMesh mesh;
+// A number in a message ("1e+300", "inf").
+std::string number_text(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4g", value);
+  return text;
+}
+
+// A body's mesh as the scene describes it, checked but not yet generated or read.
+struct MeshSpec {
+  std::variant<std::string, BoxParams, TubeParams, BallParams, CornerParams> source;  // file path
+  double scale = 1;
+  Vec3 translate = Vec3::Zero();
+};
+
+// Reads and checks a "mesh" object; adds the generated counts to `counts` (files count when read).
+MeshSpec read_mesh_spec(JsonObject m, const std::string& scene_dir, MeshCounts& counts) {
+  MeshSpec spec;
+  const auto checked = [&](auto params) {
+    try {
+      const MeshCounts c = checked_counts(params);
+      counts.nodes += c.nodes;
+      counts.tets += c.tets;
+    } catch (const ParameterError& e) {
+      m.fail(e.parameter(), e.reason());
+    }
+    spec.source = params;
+  };
   if (m.has("file")) {
     std::filesystem::path p = m.string("file");
     if (p.is_relative()) p = std::filesystem::path(scene_dir) / p;
-    mesh = read_tet_mesh(p.string()).mesh;
-    mesh.X *= m.number("scale", 1.0);
+    spec.source = p.string();
+    spec.scale = m.number("scale", 1.0);
+    if (!(spec.scale > 0)) m.fail("scale", "must be > 0");
   } else {
     const std::string gen = m.string("generator");
     if (gen == "box") {
-      mesh = box_mesh({m.vec3("lo"), m.vec3("hi"), m.int3("cells"), m.vec3("ratio", Vec3::Ones())});
+      checked(
+          BoxParams{m.vec3("lo"), m.vec3("hi"), m.int3("cells"), m.vec3("ratio", Vec3::Ones())});
     } else if (gen == "tube") {
-      mesh = tube_mesh({m.number("inner_radius"), m.number("outer_radius"), m.number("length"),
-                        m.integer("cells_through_wall"), m.integer("cells_around"),
-                        m.integer("cells_along")});
+      checked(TubeParams{m.number("inner_radius"), m.number("outer_radius"), m.number("length"),
+                         m.integer("cells_through_wall"), m.integer("cells_around"),
+                         m.integer("cells_along")});
     } else if (gen == "corner") {
-      mesh = corner_mesh(
-          {m.number("size"), m.number("core"), m.integer("core_cells"), m.number("ratio")});
+      checked(CornerParams{m.number("size"), m.number("core"), m.integer("core_cells"),
+                           m.number("ratio")});
     } else if (gen == "ball") {
-      mesh = ball_mesh(
-          {m.vec3("center", Vec3::Zero()), m.number("radius"), m.integer("cells_per_axis")});
+      checked(BallParams{m.vec3("center", Vec3::Zero()), m.number("radius"),
+                         m.integer("cells_per_axis")});
     } else {
       m.fail("generator", "unknown generator '" + gen + "' (expected box, tube, ball or corner)");
     }
   }
-  mesh.X.rowwise() += m.vec3("translate", Vec3::Zero()).transpose();
+  spec.translate = m.vec3("translate", Vec3::Zero());
   m.finish();
-  return mesh;
+  return spec;
+}
+
+// Generates or reads the mesh of a checked spec; every error names the scene key `m` too.
+TetMesh make_mesh(const MeshSpec& spec, const JsonObject& m) {
+  try {
+    TetMesh mesh = std::visit(
+        [](const auto& source) -> TetMesh {
+          using S = std::decay_t<decltype(source)>;
+          if constexpr (std::is_same_v<S, std::string>) {
+            return read_tet_mesh(source).mesh;
+          } else if constexpr (std::is_same_v<S, BoxParams>) {
+            return box_mesh(source);
+          } else if constexpr (std::is_same_v<S, TubeParams>) {
+            return tube_mesh(source);
+          } else if constexpr (std::is_same_v<S, BallParams>) {
+            return ball_mesh(source);
+          } else {
+            return corner_mesh(source);
+          }
+        },
+        spec.source);
+    if (spec.scale != 1 || spec.translate != Vec3::Zero()) {
+      // Scaling or moving far can underflow or overflow coordinates: check the mesh again.
+      mesh.X *= spec.scale;
+      mesh.X.rowwise() += spec.translate.transpose();
+      validate_and_orient(mesh, {"the scaled and translated mesh"});
+    }
+    return mesh;
+  } catch (const InputError& e) {
+    m.fail("", e.what());
+  }
 }
 
 // Material parameters by model name; the keys are those of the model's struct.
 MaterialModel read_material(JsonObject m, Vec3& fiber_direction) {
   const std::string model = m.string("model");
   MaterialModel out;
-  const auto mooney = [&] { return MooneyRivlin{m.number("C1"), m.number("C2"), m.number("a")}; };
+  // Young's modulus and Poisson's ratio are converted by the model; its range errors are
+  // reported at the key.
+  const auto elastic_constants = [&](auto convert) {
+    const double E = m.number("youngs"), nu = m.number("poisson");
+    try {
+      return convert(E, nu);
+    } catch (const std::invalid_argument& e) {
+      m.fail("youngs", e.what());
+    }
+  };
+  const auto mooney = [&] {
+    if (!m.has("youngs")) return MooneyRivlin{m.number("C1"), m.number("C2"), m.number("a")};
+    const double C2 = m.number("C2", 0.0);
+    return elastic_constants(
+        [&](double E, double nu) { return MooneyRivlin::from_youngs(E, nu, C2); });
+  };
   const auto veronda = [&] { return Veronda{m.number("alpha"), m.number("beta"), m.number("a")}; };
   if (model == "neo_hookean") {
-    out = m.has("youngs") ? NeoHookean::from_youngs(m.number("youngs"), m.number("poisson"))
+    out = m.has("youngs") ? elastic_constants(NeoHookean::from_youngs)
                           : NeoHookean{m.number("mu"), m.number("lambda")};
   } else if (model == "mooney_rivlin") {
     out = mooney();
@@ -80,68 +164,115 @@ MaterialModel read_material(JsonObject m, Vec3& fiber_direction) {
   } catch (const std::invalid_argument& e) {
     m.fail("model", e.what());
   }
+  const LinearizedModuli moduli = material_moduli(out);
+  if (!std::isfinite(moduli.mu) || !std::isfinite(moduli.bulk())) {
+    m.fail("model", "the parameters give non-finite moduli (shear " + number_text(moduli.mu) +
+                        " Pa, bulk " + number_text(moduli.bulk()) + " Pa)");
+  }
   m.finish();
   return out;
 }
 
-std::vector<Index> read_node_set(JsonObject s, const Mesh& mesh) {
-  const double tol = s.number("tolerance", 1e-9);
-  std::vector<Index> nodes;
+// A node set as the scene describes it; the nodes are selected once the meshes exist.
+struct NodeSetSpec {
+  JsonObject where;
+  std::variant<std::pair<Vec3, Vec3>, std::pair<Vec3, double>, std::vector<Index>, std::string>
+      selector;  // box (lo, hi), plane (normal, offset), list, body name
+  double tolerance = 1e-9;
+};
+
+NodeSetSpec read_node_set(JsonObject s) {
+  NodeSetSpec spec{s, {}, s.number("tolerance", 1e-9)};
+  if (!(spec.tolerance >= 0)) s.fail("tolerance", "must be >= 0");
   int kinds = 0;
   if (s.has("box")) {
     JsonObject b = s.object("box");
-    nodes = nodes_in_box(mesh.X, b.vec3("lo"), b.vec3("hi"), tol);
+    spec.selector = std::pair{b.vec3("lo"), b.vec3("hi")};
     b.finish();
     ++kinds;
   }
   if (s.has("plane")) {
     JsonObject p = s.object("plane");
-    nodes = nodes_on_plane(mesh.X, p.vec3("normal"), p.number("offset", 0.0), tol);
+    const Vec3 normal = p.vec3("normal");
+    if (!(normal.norm() > 0)) p.fail("normal", "must be a non-zero vector");
+    spec.selector = std::pair{normal, p.number("offset", 0.0)};
     p.finish();
     ++kinds;
   }
   if (s.has("list")) {
-    nodes = s.indices("list");
+    spec.selector = s.indices("list");
     ++kinds;
   }
   if (s.has("body")) {
-    const std::string name = s.string("body");
+    spec.selector = s.string("body");
+    ++kinds;
+  }
+  if (kinds != 1) s.fail("", "give exactly one of box, plane, list or body");
+  s.finish();
+  return spec;
+}
+
+std::vector<Index> select_nodes(const NodeSetSpec& spec, const Mesh& mesh) {
+  const JsonObject& s = spec.where;
+  std::vector<Index> nodes;
+  if (const auto* box = std::get_if<std::pair<Vec3, Vec3>>(&spec.selector)) {
+    nodes = nodes_in_box(mesh.X, box->first, box->second, spec.tolerance);
+  } else if (const auto* plane = std::get_if<std::pair<Vec3, double>>(&spec.selector)) {
+    nodes = nodes_on_plane(mesh.X, plane->first, plane->second, spec.tolerance);
+  } else if (const auto* list = std::get_if<std::vector<Index>>(&spec.selector)) {
+    for (const Index i : *list)
+      if (i >= mesh.num_nodes())
+        s.fail("list", "node " + std::to_string(i) + " is outside 0.." +
+                           std::to_string(mesh.num_nodes() - 1));
+    nodes = *list;
+  } else {
+    const std::string& name = std::get<std::string>(spec.selector);
     Index id = -1;
     for (size_t b = 0; b < mesh.bodies.size(); ++b)
       if (mesh.bodies[b].name == name) id = static_cast<Index>(b);
     if (id < 0) s.fail("body", "no body named '" + name + "'");
     nodes = nodes_of_body(mesh, id);
-    ++kinds;
   }
-  if (kinds != 1) s.fail("", "give exactly one of box, plane, list or body");
   if (nodes.empty()) s.fail("", "selects no nodes");
-  s.finish();
   return nodes;
 }
 
-Constraint read_constraint(JsonObject c, const Mesh& mesh, size_t index) {
+// A boundary condition whose nodes are selected once the meshes exist.
+struct ConstraintSpec {
+  Constraint constraint;  // without nodes
+  NodeSetSpec nodes;
+};
+
+// Reads a non-zero direction (an axis, a normal).
+Vec3 direction(JsonObject& c, const std::string& key) {
+  const Vec3 v = c.vec3(key);
+  if (!(v.norm() > 0)) c.fail(key, "must be a non-zero vector");
+  return v;
+}
+
+ConstraintSpec read_constraint(JsonObject c, size_t index) {
   Constraint out;
   const std::string type = c.string("type");
   out.name = c.string("name", type + "_" + std::to_string(index));
-  out.nodes = read_node_set(c.object("nodes"), mesh);
+  NodeSetSpec nodes = read_node_set(c.object("nodes"));
   if (type == "fixed") {
     out.kind = Fixed{};
   } else if (type == "displaced") {
     out.kind = Displaced{c.vec3("displacement")};
   } else if (type == "rotated") {
-    out.kind =
-        Rotated{c.vec3("axis"), c.vec3("center"), c.number("angle_deg") * std::numbers::pi / 180,
-                c.vec3("translation", Vec3::Zero())};
+    out.kind = Rotated{direction(c, "axis"), c.vec3("center"),
+                       c.number("angle_deg") * std::numbers::pi / 180,
+                       c.vec3("translation", Vec3::Zero())};
   } else if (type == "plane") {
-    out.kind = InPlane{c.vec3("normal"), c.number("offset", 0.0)};
+    out.kind = InPlane{direction(c, "normal"), c.number("offset", 0.0)};
   } else if (type == "line") {
-    out.kind = OnLine{c.vec3("direction")};
+    out.kind = OnLine{direction(c, "direction")};
   } else {
     c.fail("type", "unknown boundary condition '" + type +
                        "' (expected fixed, displaced, rotated, plane or line)");
   }
   c.finish();
-  return out;
+  return {out, nodes};
 }
 
 void read_contact(JsonObject c, Scene& scene) {
@@ -175,6 +306,14 @@ Obstacle read_obstacle(JsonObject o, size_t index) {
   return out;
 }
 
+// The options of one integrator ("newmark": {...}, "arkode": {...}), keyed by its name; an
+// error when the scene chose another integrator.
+std::optional<JsonObject> integrator_section(JsonObject& d, const char* integrator, bool chosen) {
+  if (!d.has(integrator)) return std::nullopt;
+  if (!chosen) d.fail(integrator, std::string("only for \"integrator\": \"") + integrator + "\"");
+  return d.object(integrator);
+}
+
 void read_dynamic(JsonObject d, Scene& scene) {
   DynamicOptions& o = scene.dynamic_options;
   o.integrator = d.choice<Integrator>("integrator", "integrator",
@@ -186,6 +325,12 @@ void read_dynamic(JsonObject d, Scene& scene) {
   o.duration = d.number("duration");
   if (!(o.time_step > 0)) d.fail("time_step", "must be > 0");
   if (!(o.duration >= o.time_step)) d.fail("duration", "must be >= time_step");
+  const double steps = std::ceil(o.duration / o.time_step - 1e-9);
+  if (!(steps <= kMaxStepIndex + 1)) {
+    d.fail("time_step", "duration / time_step asks for " + number_text(steps) +
+                            " steps, more than the " + std::to_string(kMaxStepIndex + 1) +
+                            " a results file holds");
+  }
   const bool explicit_scheme =
       o.integrator == Integrator::kSymplecticEuler || o.integrator == Integrator::kArkode;
   if (scene.analysis == "quasistatic") {
@@ -194,6 +339,20 @@ void read_dynamic(JsonObject d, Scene& scene) {
       d.fail("integrator", "a quasistatic analysis uses implicit_euler");
     scene.viscosity = d.number("viscosity");
     if (!(scene.viscosity > 0)) d.fail("viscosity", "must be > 0");
+  }
+  o.mass = d.choice<MassMatrix>(
+      "mass", "mass matrix",
+      {{"lumped", MassMatrix::kLumped}, {"consistent", MassMatrix::kConsistent}});
+  if (o.mass == MassMatrix::kConsistent && explicit_scheme)
+    d.fail("mass", "a consistent mass matrix needs an implicit integrator");
+  if (std::optional<JsonObject> section =
+          integrator_section(d, "newmark", o.integrator == Integrator::kNewmark)) {
+    JsonObject& n = *section;
+    o.newmark.beta = n.number("beta", o.newmark.beta);
+    o.newmark.gamma = n.number("gamma", o.newmark.gamma);
+    if (!(o.newmark.beta > 0 && o.newmark.beta <= 0.5)) n.fail("beta", "must be in (0, 0.5]");
+    if (!(o.newmark.gamma >= 0.5 && o.newmark.gamma <= 1)) n.fail("gamma", "must be in [0.5, 1]");
+    n.finish();
   }
   if (d.has("damping")) {
     JsonObject c = d.object("damping");
@@ -205,10 +364,9 @@ void read_dynamic(JsonObject d, Scene& scene) {
       c.fail("stiffness", "needs an implicit integrator");
     c.finish();
   }
-  if (d.has("arkode")) {
-    if (o.integrator != Integrator::kArkode)
-      d.fail("arkode", "only for \"integrator\": \"arkode\"");
-    JsonObject a = d.object("arkode");
+  if (std::optional<JsonObject> section =
+          integrator_section(d, "arkode", o.integrator == Integrator::kArkode)) {
+    JsonObject& a = *section;
     o.arkode.order = a.integer("order", o.arkode.order);
     o.arkode.relative_tolerance = a.number("relative_tolerance", o.arkode.relative_tolerance);
     o.arkode.absolute_tolerance = a.number("absolute_tolerance", o.arkode.absolute_tolerance);
@@ -253,6 +411,9 @@ void read_solver(JsonObject s, Scene& scene) {
   if (!(o.newton.linear.tolerance > 0 && o.newton.linear.tolerance < 1))
     s.fail("linear_tolerance", "must be in (0, 1)");
   if (o.newton.max_iterations < 1) s.fail("max_newton_iterations", "must be >= 1");
+  if (o.newton.max_line_search < 0) s.fail("max_line_search", "must be >= 0");
+  if (o.newton.linear.max_iterations < 1) s.fail("linear_max_iterations", "must be >= 1");
+  if (o.max_settle_steps < 0) s.fail("max_settle_steps", "must be >= 0");
   if (scene.quasi_viscosity < 0) s.fail("quasi_viscosity", "must be >= 0");
   if (!(scene.tolerance > 0)) s.fail("tolerance", "must be > 0");
   s.finish();
@@ -260,24 +421,100 @@ void read_solver(JsonObject s, Scene& scene) {
 
 // Sets the value at a dotted path, creating objects on the way.
 void apply_override(json& root, const Override& o, const std::string& file) {
+  const std::string where = file + ": --set " + o.path;
   json* node = &root;
   std::stringstream ss(o.path);
   std::string seg;
   while (std::getline(ss, seg, '.')) {
     const bool numeric = !seg.empty() && seg.find_first_not_of("0123456789") == std::string::npos;
     if (numeric && node->is_array()) {
-      const size_t k = std::stoul(seg);
-      if (k >= node->size())
-        throw InputError(file + ": --set " + o.path + ": index " + seg + " out of range");
+      size_t k = 0;
+      const auto [end, ec] = std::from_chars(seg.data(), seg.data() + seg.size(), k);
+      if (ec != std::errc() || end != seg.data() + seg.size() || k >= node->size())
+        throw InputError(where + ": index " + seg + " out of range");
       node = &(*node)[k];
     } else {
       if (!node->is_object() && !node->is_null())
-        throw InputError(file + ": --set " + o.path + ": '" + seg + "' is not inside an object");
+        throw InputError(where + ": '" + seg + "' is not inside an object");
       node = &(*node)[seg];
     }
   }
-  json value = json::parse(o.value, nullptr, false);
-  *node = value.is_discarded() ? json(o.value) : value;
+  // Arrays, objects and quoted strings must be valid JSON; a bare word that is no JSON number or
+  // literal is a string.
+  if (!o.value.empty() && std::string_view("[{\"").find(o.value[0]) != std::string_view::npos) {
+    *node = parse_json(o.value, where);
+  } else {
+    json value = json::parse(o.value, nullptr, false);
+    *node = value.is_discarded() ? json(o.value) : value;
+  }
+}
+
+// The whole text of a scene file, refused unread when it exceeds the JSON size limit.
+std::string read_scene_text(const std::string& path) {
+  std::error_code error;
+  std::ifstream in(path, std::ios::binary);
+  if (!in || std::filesystem::is_directory(path, error))
+    throw InputError(path + ": cannot open scene file");
+  std::string text;
+  char buffer[65536];
+  while (in.read(buffer, sizeof buffer) || in.gcount() > 0) {
+    text.append(buffer, static_cast<size_t>(in.gcount()));
+    if (text.size() > kMaxJsonBytes) {
+      throw InputError(path + ": more than the " + std::to_string(kMaxJsonBytes) +
+                       " bytes a scene may have");
+    }
+  }
+  if (in.bad()) throw InputError(path + ": cannot read scene file");
+  return text;
+}
+
+// Physical memory [bytes], or 0 when unknown.
+double physical_memory() {
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && page > 0 ? double(pages) * double(page) : 0;
+}
+
+// Refuses generated meshes that no 32-bit index or this machine's memory can hold, before any
+// is generated. kBytesPerNode and kBytesPerTet are lower bounds of what a run allocates (mesh,
+// element blocks, block-sparse Hessian: about 14 3x3 blocks of a row per node), so a refused
+// scene could never have run here.
+void check_sizes(JsonObject& r, const MeshCounts& counts) {
+  constexpr double kBytesPerNode = 1000, kBytesPerTet = 200;
+  constexpr double kMaxIndex = std::numeric_limits<Index>::max();
+  if (counts.nodes > kMaxIndex || counts.tets > kMaxIndex) {
+    r.fail("bodies", "the generated meshes have " + std::to_string(counts.nodes) + " nodes and " +
+                         std::to_string(counts.tets) +
+                         " tets together, more than the 2147483647 a 32-bit index can number");
+  }
+  const double need = kBytesPerNode * counts.nodes + kBytesPerTet * counts.tets;
+  const double have = physical_memory();
+  if (have > 0 && need > have) {
+    r.fail("bodies", "the generated meshes (" + std::to_string(counts.nodes) + " nodes, " +
+                         std::to_string(counts.tets) + " tets) need at least " +
+                         number_text(need / (1 << 30)) + " GiB, more than the " +
+                         number_text(have / (1 << 30)) + " GiB of memory here");
+  }
+}
+
+// A Newton tolerance that is infinite would call any residual converged, one that underflows to
+// zero none: both come from extreme moduli or mesh sizes.
+void check_newton_tolerance(JsonObject& r, const Scene& scene,
+                            const std::vector<std::string>& material_paths) {
+  const double tolerance = newton_tolerance(scene);
+  if (std::isfinite(tolerance) && tolerance > 0) return;
+  size_t stiffest = 0;
+  double E = 0;
+  for (size_t g = 0; g < scene.groups.size(); ++g) {
+    const double Eg = material_moduli(scene.groups[g].material).youngs();
+    if (!(Eg <= E)) E = Eg, stiffest = g;
+  }
+  const std::string why =
+      "the Newton tolerance (tolerance x E h^2 sqrt(#dofs)) is " + number_text(tolerance) +
+      " N, not a finite positive number (E = " + number_text(E) +
+      " Pa, mean edge h = " + number_text(mean_edge_length(scene.mesh.X, scene.mesh.tets)) + " m)";
+  if (!std::isfinite(E) || !std::isfinite(E * E) || scene.groups.empty())
+    r.fail(scene.groups.empty() ? "bodies" : material_paths[stiffest], why);
+  r.fail("solver.tolerance", why);
 }
 
 }  // namespace
@@ -290,19 +527,14 @@ Override parse_override(const std::string& text) {
 }
 
 Scene load_scene(const std::string& path, const std::vector<Override>& overrides) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open scene file");
-  json root;
-  try {
-    root = json::parse(in);
-  } catch (const json::parse_error& e) {
-    throw InputError(path + ": invalid JSON: " + e.what());
-  }
+  json root = parse_json(read_scene_text(path), path);
   for (const Override& o : overrides) apply_override(root, o, path);
 
+  // First every key is read and checked; only then are meshes generated or read.
   Scene scene;
   scene.file = path;
-  scene.json_text = root.dump(2);
+  scene.inputs.push_back(path);
+  scene.json_text = root.dump(2, ' ', false, json::error_handler_t::replace);
   JsonObject r(root, "", path);
   scene.name = r.string("name", std::filesystem::path(path).stem().string());
   r.ignore("description");
@@ -314,49 +546,63 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
   }
   scene.gravity = r.vec3("gravity", Vec3::Zero());
 
+  struct BodySpec {
+    JsonObject where;
+    std::string name;
+    MeshSpec mesh;
+    JsonObject mesh_where;
+    bool rigid;
+    MaterialModel material;
+    Vec3 fiber;
+    double density;
+    Vec3 velocity;
+  };
   const std::string dir = std::filesystem::path(path).parent_path().string();
-  std::vector<double> density;
-  std::vector<Vec3> velocity;
+  std::vector<BodySpec> bodies;
+  std::vector<std::string> material_paths;  // of the deformable bodies, in order
+  MeshCounts counts;
   for (JsonObject b : r.objects("bodies")) {
     const std::string name = b.string("name");
-    for (const Body& existing : scene.mesh.bodies)
+    for (const BodySpec& existing : bodies)
       if (existing.name == name) b.fail("name", "duplicate body name '" + name + "'");
-    const TetMesh mesh = read_body_mesh(b.object("mesh"), dir);
-    const bool rigid = b.boolean("rigid", false);
-    const Index id = scene.mesh.add_body(name, mesh);
-    const Body& body = scene.mesh.bodies[id];
-    scene.rigid.push_back(rigid);
-    if (rigid) {
-      // No unknowns: held in place unless a boundary condition on the body moves it.
-      std::vector<Index> nodes(static_cast<size_t>(body.num_nodes));
-      for (Index k = 0; k < body.num_nodes; ++k) nodes[k] = body.first_node + k;
-      scene.constraints.push_back({name + "_rigid", nodes, Fixed{}});
+    const JsonObject mesh_where = b.object("mesh");
+    BodySpec body{b,
+                  name,
+                  read_mesh_spec(mesh_where, dir, counts),
+                  mesh_where,
+                  b.boolean("rigid", false),
+                  {},
+                  Vec3::UnitX(),
+                  0,
+                  Vec3::Zero()};
+    if (body.rigid) {
       if (b.has("material")) b.fail("material", "a rigid body takes no material");
     } else {
-      Vec3 fiber = Vec3::UnitX();
-      ElasticGroup g{read_material(b.object("material"), fiber), {}, Points()};
-      for (Index t = 0; t < body.num_tets; ++t) g.tets.push_back(body.first_tet + t);
-      if (material_uses_fiber(g.material)) g.fibers = fiber.transpose().replicate(body.num_tets, 1);
-      scene.groups.push_back(std::move(g));
+      const JsonObject material = b.object("material");
+      body.material = read_material(material, body.fiber);
+      material_paths.push_back(material.path());
     }
-    const double rho = b.number("density", 1000.0);
-    if (!(rho > 0)) b.fail("density", "must be > 0");
-    velocity.insert(velocity.end(), static_cast<size_t>(body.num_nodes),
-                    b.vec3("velocity", Vec3::Zero()));
+    body.density = b.number("density", 1000.0);
+    if (!(body.density > 0)) b.fail("density", "must be > 0");
+    body.velocity = b.vec3("velocity", Vec3::Zero());
     b.finish();
-    density.insert(density.end(), static_cast<size_t>(body.num_tets), rho);
+    if (const auto* file = std::get_if<std::string>(&body.mesh.source)) {
+      std::filesystem::path p(*file);
+      scene.inputs.push_back(*file);
+      if (p.extension() == ".node" || p.extension() == ".ele") {  // a TetGen mesh is two files
+        scene.inputs.push_back(p.replace_extension(".node").string());
+        scene.inputs.push_back(p.replace_extension(".ele").string());
+      }
+    }
+    bodies.push_back(std::move(body));
   }
-  if (scene.mesh.bodies.empty()) r.fail("bodies", "a scene needs at least one body");
-  scene.initial_velocity.resize(scene.mesh.num_nodes(), 3);
-  for (Index i = 0; i < scene.mesh.num_nodes(); ++i)
-    scene.initial_velocity.row(i) = velocity[i].transpose();
-  scene.tet_density =
-      Eigen::Map<VectorX>(density.data(), static_cast<Eigen::Index>(density.size()));
+  if (bodies.empty()) r.fail("bodies", "a scene needs at least one body");
+  check_sizes(r, counts);
 
+  std::vector<ConstraintSpec> boundary;
   if (r.has("boundary")) {
     std::vector<JsonObject> list = r.objects("boundary");
-    for (size_t k = 0; k < list.size(); ++k)
-      scene.constraints.push_back(read_constraint(list[k], scene.mesh, k));
+    for (size_t k = 0; k < list.size(); ++k) boundary.push_back(read_constraint(list[k], k));
   }
   if (r.has("contact")) read_contact(r.object("contact"), scene);
   if (r.has("obstacles")) {
@@ -380,6 +626,44 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
   }
   scene.dynamic_options.newton = scene.static_options.newton;
   r.finish();
+
+  // Then the meshes, and what depends on them.
+  std::vector<double> density;
+  std::vector<Vec3> velocity;
+  for (const BodySpec& b : bodies) {
+    const Index id = scene.mesh.add_body(b.name, make_mesh(b.mesh, b.mesh_where));
+    const Body& body = scene.mesh.bodies[id];
+    scene.rigid.push_back(b.rigid);
+    if (b.rigid) {
+      // No unknowns: held in place unless a boundary condition on the body moves it.
+      std::vector<Index> nodes(static_cast<size_t>(body.num_nodes));
+      for (Index k = 0; k < body.num_nodes; ++k) nodes[k] = body.first_node + k;
+      scene.constraints.push_back({b.name + "_rigid", nodes, Fixed{}});
+    } else {
+      ElasticGroup g{b.material, {}, Points()};
+      for (Index t = 0; t < body.num_tets; ++t) g.tets.push_back(body.first_tet + t);
+      if (material_uses_fiber(g.material))
+        g.fibers = b.fiber.transpose().replicate(body.num_tets, 1);
+      scene.groups.push_back(std::move(g));
+    }
+    velocity.insert(velocity.end(), static_cast<size_t>(body.num_nodes), b.velocity);
+    density.insert(density.end(), static_cast<size_t>(body.num_tets), b.density);
+  }
+  scene.initial_velocity.resize(scene.mesh.num_nodes(), 3);
+  for (Index i = 0; i < scene.mesh.num_nodes(); ++i)
+    scene.initial_velocity.row(i) = velocity[i].transpose();
+  scene.tet_density =
+      Eigen::Map<VectorX>(density.data(), static_cast<Eigen::Index>(density.size()));
+  for (ConstraintSpec& c : boundary) {
+    c.constraint.nodes = select_nodes(c.nodes, scene.mesh);
+    scene.constraints.push_back(std::move(c.constraint));
+  }
+  try {  // conditions that contradict each other on a node
+    [[maybe_unused]] const Constraints constraints(scene.mesh.X, scene.constraints);
+  } catch (const InputError& e) {
+    r.fail("boundary", e.what());
+  }
+  check_newton_tolerance(r, scene, material_paths);
   return scene;
 }
 

@@ -22,7 +22,8 @@ enum class ContactModel { kNone, kMaterialDepth, kNodeToSurface };
 
 struct Scene {
   std::string name;
-  std::string file;       ///< path it was read from
+  std::string file;                 ///< path it was read from
+  std::vector<std::string> inputs;  ///< every file the scene reads (itself, mesh files)
   std::string json_text;  ///< the (possibly overridden) scene as JSON, stored in the results
   std::string analysis = "static";
   Mesh mesh;

@@ -5,6 +5,7 @@
 #include "contact/material_depth.hpp"
 #include "contact/node_to_surface_contact.hpp"
 #include "core/lumped_mass.hpp"
+#include "integrators/consistent_mass.hpp"
 #include "integrators/gravity.hpp"
 #include "integrators/stiffness_tether.hpp"
 
@@ -46,16 +47,20 @@ std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers)
       dyn.integrator == Integrator::kImplicitEuler || dyn.integrator == Integrator::kNewmark;
   if (time_dependent && implicit_scheme) {
     ImplicitTerms& terms = model->implicit;
-    if (scene.analysis == "dynamic")
-      terms.inertia = &system.add(std::make_unique<NodalSpring>("inertia", mass));
+    // Inertia and mass damping with the lumped or the consistent mass matrix.
+    const auto mass_tether = [&](const char* name, double factor) -> Tether* {
+      if (dyn.mass == MassMatrix::kConsistent)
+        return &system.add(
+            std::make_unique<ConsistentMass>(name, mesh.X, mesh.tets, scene.tet_density, factor));
+      return &system.add(std::make_unique<NodalSpring>(name, factor * mass));
+    };
+    if (scene.analysis == "dynamic") terms.inertia = mass_tether("inertia", 1.0);
     if (scene.analysis == "quasistatic") {
       terms.damping.push_back(&system.add(std::make_unique<NodalSpring>(
           "viscosity", quasi_viscosity_stiffness(mesh.X, mesh.tets, scene.viscosity))));
     }
-    if (dyn.damping.mass > 0) {
-      terms.damping.push_back(
-          &system.add(std::make_unique<NodalSpring>("mass damping", dyn.damping.mass * mass)));
-    }
+    if (dyn.damping.mass > 0)
+      terms.damping.push_back(mass_tether("mass damping", dyn.damping.mass));
     if (dyn.damping.stiffness > 0) {
       terms.damping.push_back(&system.add(std::make_unique<StiffnessTether>(
           "stiffness damping", *model->elasticity, dyn.damping.stiffness)));

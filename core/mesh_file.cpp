@@ -13,6 +13,12 @@ LoadedMesh read_tet_mesh(const std::string& path) {
   const std::string ext = std::filesystem::path(path).extension().string();
   if (ext == ".msh") return read_gmsh(path);
   if (ext == ".node" || ext == ".ele") return read_tetgen(path);
+  if (ext == ".obj") {
+    throw InputError(located(path, 0,
+                             "an OBJ file holds a triangle surface, not a tetrahedral mesh; "
+                             "tetrahedralize it first (TetGen or Gmsh) and give the .node/.ele or "
+                             ".msh file"));
+  }
   throw InputError(located(path, 0,
                            "unknown mesh file extension '" + ext +
                                "' (expected .msh for Gmsh, .node or .ele for TetGen)"));

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <functional>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <string>
@@ -20,7 +22,7 @@ TetIndices kuhn_tets(int nx, int ny, int nz, const std::function<Index(int, int,
   // The 6 monotone lattice paths from corner (0,0,0) to (1,1,1), one per axis permutation.
   static constexpr int kPerm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2},
                                       {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
-  TetIndices tets(6 * nx * ny * nz, 4);
+  TetIndices tets(Index(6) * nx * ny * nz, 4);  // the count was checked to fit an Index
   Index t = 0;
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < ny; ++j)
@@ -37,17 +39,49 @@ TetIndices kuhn_tets(int nx, int ny, int nz, const std::function<Index(int, int,
   return tets;
 }
 
-void require(bool ok, const std::string& what) {
-  if (!ok) throw InputError(what);
+void require(bool ok, const char* parameter, const std::string& what) {
+  if (!ok) throw ParameterError(parameter, what);
+}
+
+// Counts of a mesh, refused when they do not fit an Index; products in double are exact far past
+// 2^31, so the comparison sees the true count (no overflow).
+MeshCounts fitting(double nodes, double tets, const char* parameter) {
+  constexpr double kMax = std::numeric_limits<Index>::max();
+  const auto shown = [](double n) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.4g", n);
+    return std::string(text);
+  };
+  require(nodes <= kMax && tets <= kMax, parameter,
+          "gives " + shown(nodes) + " nodes and " + shown(tets) +
+              " tets, more than the 2147483647 a 32-bit index can number");
+  return {static_cast<std::int64_t>(nodes), static_cast<std::int64_t>(tets)};
+}
+
+bool finite(const Vec3& v) {
+  return v.allFinite();
 }
 
 }  // namespace
 
-TetMesh box_mesh(const BoxParams& p) {
+MeshCounts checked_counts(const BoxParams& p) {
   const Eigen::Vector3i n = p.cells;
-  require(n.minCoeff() >= 1, "box: cells must be >= 1 along every axis");
-  require((p.hi - p.lo).minCoeff() > 0, "box: hi must exceed lo along every axis");
-  require(p.ratio.minCoeff() > 0, "box: cell size ratios must be > 0");
+  require(finite(p.lo), "lo", "must be finite");
+  require(finite(p.hi) && finite(p.hi - p.lo), "hi", "must be finite, and so must hi - lo");
+  require((p.hi - p.lo).minCoeff() > 0, "hi", "must exceed lo along every axis");
+  require(n.minCoeff() >= 1, "cells", "must be >= 1 along every axis");
+  require(finite(p.ratio) && p.ratio.minCoeff() > 0, "ratio", "cell size ratios must be > 0");
+  for (int a = 0; a < 3; ++a) {
+    require(std::isfinite(std::pow(p.ratio(a), n(a))) && std::pow(p.ratio(a), n(a)) > 0, "ratio",
+            "ratio^cells overflows along axis " + std::to_string(a));
+  }
+  const Eigen::Array3d c = n.cast<double>().array();
+  return fitting((c + 1).prod(), 6 * c.prod(), "cells");
+}
+
+TetMesh box_mesh(const BoxParams& p) {
+  checked_counts(p);
+  const Eigen::Vector3i n = p.cells;
   // Fraction of the length below node k of n along an axis with cell ratio r.
   const auto fraction = [](int k, int n, double r) {
     return std::abs(r - 1) < 1e-12 ? double(k) / n : (std::pow(r, k) - 1) / (std::pow(r, n) - 1);
@@ -63,16 +97,25 @@ TetMesh box_mesh(const BoxParams& p) {
         m.X.row(id(i, j, k)) = (p.lo.array() + s.array() * (p.hi - p.lo).array()).transpose();
       }
   m.tets = kuhn_tets(n(0), n(1), n(2), id);
-  validate_and_orient(m);
+  validate_and_orient(m, {"box"});
   return m;
 }
 
+MeshCounts checked_counts(const TubeParams& p) {
+  require(p.inner_radius > 0 && std::isfinite(p.inner_radius), "inner_radius",
+          "must be > 0 and finite");
+  require(p.outer_radius > p.inner_radius && std::isfinite(p.outer_radius), "outer_radius",
+          "must exceed inner_radius and be finite");
+  require(p.length > 0 && std::isfinite(p.length), "length", "must be > 0 and finite");
+  require(p.cells_through_wall >= 1, "cells_through_wall", "must be >= 1");
+  require(p.cells_around >= 3, "cells_around", "must be >= 3");
+  require(p.cells_along >= 1, "cells_along", "must be >= 1");
+  const double nr = p.cells_through_wall, nt = p.cells_around, nz = p.cells_along;
+  return fitting((nr + 1) * nt * (nz + 1), 6 * nr * nt * nz, "cells_around");
+}
+
 TetMesh tube_mesh(const TubeParams& p) {
-  require(p.inner_radius > 0 && p.outer_radius > p.inner_radius,
-          "tube: need 0 < inner_radius < outer_radius");
-  require(p.length > 0, "tube: length must be > 0");
-  require(p.cells_through_wall >= 1 && p.cells_along >= 1 && p.cells_around >= 3,
-          "tube: need cells_through_wall >= 1, cells_along >= 1, cells_around >= 3");
+  checked_counts(p);
   const int nr = p.cells_through_wall, nt = p.cells_around, nz = p.cells_along;
   TetMesh m;
   m.X.resize((nr + 1) * nt * (nz + 1), 3);
@@ -87,13 +130,20 @@ TetMesh tube_mesh(const TubeParams& p) {
             Vec3(r * std::cos(th), r * std::sin(th), p.length * iz / nz).transpose();
       }
   m.tets = kuhn_tets(nr, nt, nz, id);
-  validate_and_orient(m);
+  validate_and_orient(m, {"tube"});
   return m;
 }
 
+MeshCounts checked_counts(const BallParams& p) {
+  require(finite(p.center), "center", "must be finite");
+  require(p.radius > 0 && std::isfinite(p.radius), "radius", "must be > 0 and finite");
+  require(p.cells_per_axis >= 1, "cells_per_axis", "must be >= 1");
+  const double n = p.cells_per_axis;
+  return fitting((n + 1) * (n + 1) * (n + 1), 6 * n * n * n, "cells_per_axis");
+}
+
 TetMesh ball_mesh(const BallParams& p) {
-  require(p.radius > 0, "ball: radius must be > 0");
-  require(p.cells_per_axis >= 1, "ball: cells_per_axis must be >= 1");
+  checked_counts(p);
   const int n = p.cells_per_axis;
   TetMesh m = box_mesh({Vec3::Constant(-1), Vec3::Constant(1), Eigen::Vector3i::Constant(n)});
   // Cube-to-ball map x' = x sqrt(1 - y^2/2 - z^2/2 + y^2 z^2/3) (and cyclic): smooth, one-to-one,
@@ -106,17 +156,33 @@ TetMesh ball_mesh(const BallParams& p) {
                  z * std::sqrt(1 - x2 / 2 - y2 / 2 + x2 * y2 / 3));
     m.X.row(v) = (p.center + p.radius * q).transpose();
   }
-  validate_and_orient(m);
+  validate_and_orient(m, {"ball"});
   return m;
 }
 
+namespace {
+// Shells between the core and the outer cube: enough that each grows by at most `ratio` (as a
+// double: a ratio just above 1 asks for more shells than an int holds).
+double shell_count(const CornerParams& p) {
+  return std::max(1.0, std::ceil(std::log(p.size / p.core) / std::log(p.ratio) - 1e-9));
+}
+}  // namespace
+
+MeshCounts checked_counts(const CornerParams& p) {
+  require(p.core > 0 && std::isfinite(p.core), "core", "must be > 0 and finite");
+  require(p.size > p.core && std::isfinite(p.size), "size", "must exceed core and be finite");
+  require(p.core_cells >= 1, "core_cells", "must be >= 1");
+  require(p.ratio > 1 && std::isfinite(p.ratio), "ratio", "must be > 1 and finite");
+  const double m = p.core_cells, shells = shell_count(p);
+  // Core (m+1)^3 nodes and 6 m^3 tets; each shell adds three faces of m x m cells.
+  const double nodes = (m + 1) * (m + 1) * (m + 1) + shells * (3 * m * m + 3 * m + 1);
+  return fitting(nodes, 6 * m * m * m + 18 * m * m * shells, "core_cells");
+}
+
 TetMesh corner_mesh(const CornerParams& p) {
-  require(p.core > 0 && p.size > p.core, "corner: need 0 < core < size");
-  require(p.core_cells >= 1, "corner: core_cells must be >= 1");
-  require(p.ratio > 1, "corner: ratio must be > 1");
+  checked_counts(p);
   const int m = p.core_cells;
-  const int shells = std::max(
-      1, static_cast<int>(std::ceil(std::log(p.size / p.core) / std::log(p.ratio) - 1e-9)));
+  const int shells = static_cast<int>(shell_count(p));
   const double q = std::pow(p.size / p.core, 1.0 / shells);
   // Nodes shared by the blocks are computed by the same expressions, so they coincide exactly.
   std::map<std::array<double, 3>, Index> index;
@@ -157,7 +223,7 @@ TetMesh corner_mesh(const CornerParams& p) {
     mesh.tets.middleRows(row, t.rows()) = t;
     row += static_cast<Index>(t.rows());
   }
-  validate_and_orient(mesh);
+  validate_and_orient(mesh, {"corner"});
   return mesh;
 }
 

@@ -3,6 +3,8 @@
 /// Each hexahedral cell is split into 6 tets along its main diagonal (Kuhn split); neighbouring
 /// cells then split their shared faces the same way, so the meshes are conforming.
 
+#include <cstdint>
+
 #include "core/tet_mesh.hpp"
 
 namespace depthfem {
@@ -48,13 +50,27 @@ struct CornerParams {
   double ratio = 1.2;  ///< > 1
 };
 
+/// How many nodes and tets a generator makes, counted in 64 bits before anything is allocated.
+struct MeshCounts {
+  std::int64_t nodes = 0, tets = 0;
+};
+
+/// Checks the parameters of a generator without generating anything and returns the counts it
+/// will make. Throws ParameterError naming the field at fault: sizes out of order or not finite,
+/// no cells, grading that overflows, or more nodes or tets than a 32-bit Index can number.
+MeshCounts checked_counts(const BoxParams& p);
+MeshCounts checked_counts(const TubeParams& p);
+MeshCounts checked_counts(const BallParams& p);
+MeshCounts checked_counts(const CornerParams& p);
+
 /// Box mesh with (n+1)^3 nodes and 6 n^3 tets; node (i, j, k) has index i + (nx+1)(j + (ny+1) k).
 TetMesh box_mesh(const BoxParams& p);
-/// Tube mesh; throws InputError for non-positive sizes or radii out of order.
+/// Tube mesh. Every generator first runs checked_counts (ParameterError); a generated element that
+/// is degenerate throws InputError "GENERATOR: element N is degenerate ...".
 TetMesh tube_mesh(const TubeParams& p);
-/// Ball mesh; throws InputError for a non-positive radius or resolution.
+/// Ball mesh.
 TetMesh ball_mesh(const BallParams& p);
-/// Corner-graded cube; throws InputError for sizes out of order, no cells or ratio <= 1.
+/// Corner-graded cube.
 TetMesh corner_mesh(const CornerParams& p);
 
 }  // namespace depthfem

@@ -245,8 +245,9 @@ void ResultsFile::append_step(const StepRecord& step, const Points& x, const Poi
              std::to_string(expected) + " (" + of + ")");
   };
   const Eigen::Index num_tets = s.num_tets;
-  if (step.index < 0 || step.index > 999999)
-    f.fail("step index " + std::to_string(step.index) + " is outside 0..999999");
+  if (step.index < 0 || step.index > kMaxStepIndex)
+    f.fail("step index " + std::to_string(step.index) + " is outside 0.." +
+           std::to_string(kMaxStepIndex));
   expect_rows("x", x.rows(), s.num_nodes(), "#nodes");
   if (bool(v) != fields.velocity)
     f.fail(group +

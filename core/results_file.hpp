@@ -35,6 +35,9 @@
 
 namespace depthfem {
 
+/// The largest step index a results file holds (step groups are named with six digits).
+inline constexpr Index kMaxStepIndex = 999999;
+
 /// Metadata of a run written to /run at creation, and what its steps will hold.
 struct RunInfo {
   std::string scene_json;                     ///< the scene file text

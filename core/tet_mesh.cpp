@@ -1,6 +1,9 @@
 #include "core/tet_mesh.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <vector>
 
 #include "core/error.hpp"
 
@@ -14,14 +17,91 @@ namespace {
 long line_of(const std::vector<long>& lines, Index i) {
   return i < static_cast<Index>(lines.size()) ? lines[i] : 0;
 }
+
+// "FILE:LINE: node I WHAT" in the file that lists the nodes.
+InputError node_error(const MeshSource& source, Index i, const std::string& what) {
+  return InputError(located(source.node_file.empty() ? source.file : source.node_file,
+                            line_of(source.node_line, i),
+                            "node " + std::to_string(i) + " " + what));
+}
+
+// "element T (line L)", or "element T" when the line is unknown.
+std::string element_at(const MeshSource& source, Index t) {
+  const long line = line_of(source.tet_line, t);
+  return "element " + std::to_string(t) + (line > 0 ? " (line " + std::to_string(line) + ")" : "");
+}
+
+// A face of a positively oriented tet: its sorted nodes and whether its outward orientation is an
+// odd permutation of them. Two tets on opposite sides of a face see it with opposite parity.
+struct OrientedFace {
+  std::array<Index, 3> sorted;
+  bool odd;
+  Index tet;
+};
+
+// Every face belongs to one tet (boundary) or two on opposite sides of it (interior). A tet listed
+// twice, or two tets folded over each other, see a face with the same orientation; a third tet on
+// a face overlaps one of the other two.
+void check_faces(const TetIndices& tets, const MeshSource& source) {
+  // Face k of tet (0,1,2,3) is opposite vertex k, its right-hand normal pointing outward.
+  static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  std::vector<OrientedFace> faces;
+  faces.reserve(4 * static_cast<size_t>(tets.rows()));
+  for (Index t = 0; t < tets.rows(); ++t) {
+    for (const auto& f : kFace) {
+      const Index a = tets(t, f[0]), b = tets(t, f[1]), c = tets(t, f[2]);
+      std::array<Index, 3> sorted = {a, b, c};
+      std::sort(sorted.begin(), sorted.end());
+      faces.push_back({sorted, ((a > b) + (a > c) + (b > c)) % 2 == 1, t});
+    }
+  }
+  std::sort(faces.begin(), faces.end(), [](const OrientedFace& x, const OrientedFace& y) {
+    return x.sorted != y.sorted ? x.sorted < y.sorted : x.tet < y.tet;
+  });
+  for (size_t i = 0; i + 1 < faces.size(); ++i) {
+    const OrientedFace &f = faces[i], &g = faces[i + 1];
+    if (f.sorted != g.sorted) continue;
+    const auto fail = [&](const std::string& what) {
+      throw InputError(located(source.file, line_of(source.tet_line, g.tet),
+                               element_at(source, g.tet) + " " + what));
+    };
+    if (i + 2 < faces.size() && faces[i + 2].sorted == f.sorted) {
+      throw InputError(
+          located(source.file, line_of(source.tet_line, faces[i + 2].tet),
+                  "face (" + std::to_string(f.sorted[0]) + " " + std::to_string(f.sorted[1]) + " " +
+                      std::to_string(f.sorted[2]) +
+                      ") belongs to three or more elements: " + element_at(source, f.tet) + ", " +
+                      element_at(source, g.tet) + ", " + element_at(source, faces[i + 2].tet)));
+    }
+    if (f.odd != g.odd) continue;
+    std::array<Index, 4> x, y;
+    for (int k = 0; k < 4; ++k) x[k] = tets(f.tet, k), y[k] = tets(g.tet, k);
+    std::sort(x.begin(), x.end());
+    std::sort(y.begin(), y.end());
+    if (x == y) fail("repeats the nodes of " + element_at(source, f.tet));
+    fail("overlaps " + element_at(source, f.tet) +
+         ": both lie on the same side of their shared face");
+  }
+}
+
+// A node outside every tet has no stiffness: the linear systems turn singular.
+void check_every_node_used(const TetMesh& mesh, const MeshSource& source) {
+  std::vector<bool> used(static_cast<size_t>(mesh.X.rows()), false);
+  for (Index t = 0; t < mesh.tets.rows(); ++t)
+    for (int k = 0; k < 4; ++k) used[static_cast<size_t>(mesh.tets(t, k))] = true;
+  for (Index i = 0; i < static_cast<Index>(used.size()); ++i) {
+    if (!used[static_cast<size_t>(i)]) {
+      throw node_error(source, i, "belongs to no element");
+    }
+  }
+}
 }  // namespace
 
 Index validate_and_orient(TetMesh& mesh, const MeshSource& source) {
   const Index n_nodes = static_cast<Index>(mesh.X.rows());
   for (Index i = 0; i < n_nodes; ++i) {
     if (!mesh.X.row(i).allFinite()) {
-      throw InputError(located(source.file, line_of(source.node_line, i),
-                               "node " + std::to_string(i) + " has a non-finite coordinate"));
+      throw node_error(source, i, "has a non-finite coordinate");
     }
   }
   Index flipped = 0;
@@ -52,6 +132,8 @@ Index validate_and_orient(TetMesh& mesh, const MeshSource& source) {
       ++flipped;
     }
   }
+  check_faces(mesh.tets, source);
+  check_every_node_used(mesh, source);
   return flipped;
 }
 

@@ -45,6 +45,7 @@ void expect_file_end(LineReader& in, Index count, const char* noun) {
 // Coordinates of NAME.node, row-major, and the number of its first point (0 or 1).
 struct TetgenNodes {
   std::vector<double> xyz;
+  std::vector<long> line;  // of each point
   long long first = 0;
 };
 
@@ -81,6 +82,7 @@ TetgenNodes read_node_file(const std::string& path) {
         return std::string(kAxis[k]) + " coordinate of node " + std::to_string(number);
       }));
     }
+    nodes.line.push_back(in.line());
   }
   expect_file_end(in, count, "points");
   return nodes;
@@ -95,7 +97,9 @@ LoadedMesh read_tetgen(const std::string& path) {
 
   // NAME.ele: "#tets nodes-per-tet #attributes", then "number n0 n1 n2 n3 [attributes]" per tet.
   MeshSource source;
-  source.file = base + ".ele";  // node_line stays empty: coordinates were checked when read
+  source.file = base + ".ele";
+  source.node_file = base + ".node";
+  source.node_line = nodes.line;
   LineReader in(source.file, '#');
   const std::vector<Index> header =
       read_header(in, 3, "#tetrahedra nodes-per-tetrahedron #attributes");

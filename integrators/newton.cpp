@@ -47,12 +47,18 @@ NewtonResult NewtonSolver::solve(Points& x) {
     result.failure = "the starting configuration is illegal (an element is inverted)";
     return result;
   }
+  if (!(std::isfinite(options_.tolerance) && options_.tolerance > 0)) {
+    result.failure = "the Newton tolerance " + std::to_string(options_.tolerance) +
+                     " N is not a finite positive number";
+    return result;
+  }
   constraints_.project(g);
   double residual = g.norm();
   result.residuals.push_back(residual);
   for (;;) {
     result.energy = energy;
-    if (residual <= options_.tolerance) {
+    // A non-finite residual (overflowing forces) never counts as converged.
+    if (std::isfinite(residual) && residual <= options_.tolerance) {
       result.converged = true;
       return result;
     }

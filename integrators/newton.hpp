@@ -19,7 +19,8 @@ enum class LineSearchRule {
 struct NewtonOptions {
   int max_iterations = 30;
   LineSearchRule line_search = LineSearchRule::kEnergy;
-  /// Converged when |P grad E|_2 <= tolerance [N] (P: projection onto free directions).
+  /// Converged when |P grad E|_2 <= tolerance [N] (P: projection onto free directions), both
+  /// finite; a tolerance that is not finite and positive fails the solve at once.
   double tolerance = 1e-8;
   /// Step halvings before the line search gives up.
   int max_line_search = 30;

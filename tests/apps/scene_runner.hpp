@@ -1,14 +1,37 @@
 #pragma once
 // Helpers for tests that run the scenes of apps/scenes.
 
+#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include "apps/run_scene.hpp"
 
 namespace depthfem::testing {
+
+/// A path in the temporary folder unique to this process (tests of one suite run in parallel
+/// processes, and several checkouts may test at once).
+inline std::string temp_path(const std::string& name) {
+  return (std::filesystem::temp_directory_path() /
+          ("depthfem_" + std::to_string(getpid()) + "_" + name))
+      .string();
+}
+
+/// A results file at temp_path(name + ".h5"), removed with its sidecar when the test ends.
+struct TemporaryResults {
+  std::string path;
+  explicit TemporaryResults(const std::string& name) : path(temp_path(name + ".h5")) {}
+  ~TemporaryResults() {
+    std::filesystem::remove(path);
+    std::filesystem::remove(std::filesystem::path(path).replace_extension(".xmf"));
+  }
+  TemporaryResults(const TemporaryResults&) = delete;
+  TemporaryResults& operator=(const TemporaryResults&) = delete;
+};
 
 inline std::string scene_path(const std::string& name) {
   return std::string(DEPTHFEM_SOURCE_DIR) + "/apps/scenes/" + name + ".json";

@@ -6,8 +6,6 @@
 #include <filesystem>
 #include <fstream>
 
-#include <unistd.h>
-
 #include "apps/scene_runner.hpp"
 #include "core/lumped_mass.hpp"
 #include "core/results_file.hpp"
@@ -18,6 +16,7 @@ namespace {
 using testing::interface;
 using testing::load;
 using testing::run;
+using testing::TemporaryResults;
 
 // Extreme z of the nodes of one body.
 double body_z(const Scene& s, const Points& x, Index body, bool top) {
@@ -25,19 +24,6 @@ double body_z(const Scene& s, const Points& x, Index body, bool top) {
   const auto z = x.col(2).segment(b.first_node, b.num_nodes);
   return top ? z.maxCoeff() : z.minCoeff();
 }
-
-// A results file in the temporary directory, removed with its sidecar at the end of the test.
-struct TemporaryResults {
-  std::string path;
-  explicit TemporaryResults(const std::string& name)
-      : path((std::filesystem::temp_directory_path() /
-              ("depthfem_" + name + "_" + std::to_string(getpid()) + ".h5"))
-                 .string()) {}
-  ~TemporaryResults() {
-    std::filesystem::remove(path);
-    std::filesystem::remove(std::filesystem::path(path).replace_extension(".xmf"));
-  }
-};
 
 // Reads the contact fields of every step back from results file `h5`: the contact pressure
 // integrated over the boundary (per triangle: pressure x its area at the step's positions) is
@@ -127,8 +113,7 @@ TEST(ContactScenes, SlidingBlockConvergesAtEveryStep) {
 // deformable block: its nodes follow the prescribed motion exactly, and the block's base carries
 // the contact force.
 TEST(ContactScenes, RigidBodyWithPrescribedMotionPressesADeformableBlock) {
-  const std::string path =
-      (std::filesystem::temp_directory_path() / "depthfem_rigid_press.json").string();
+  const std::string path = testing::temp_path("rigid_press.json");
   std::ofstream(path) << R"({
     "bodies": [
       {"name": "block", "mesh": {"generator": "box", "lo": [0, 0, 0], "hi": [1, 1, 0.3], "cells": [5, 5, 3]},

@@ -4,8 +4,6 @@
 // section and the scene's physics choose.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <cmath>
 #include <filesystem>
 
@@ -20,17 +18,7 @@ namespace {
 using namespace closed_form;
 using testing::load;
 using testing::run;
-
-// A results file in the temporary directory, removed with its sidecar at the end of the test.
-struct TemporaryResults {
-  std::string path = (std::filesystem::temp_directory_path() /
-                      ("depthfem_run_scene_" + std::to_string(getpid()) + ".h5"))
-                         .string();
-  ~TemporaryResults() {
-    std::filesystem::remove(path);
-    std::filesystem::remove(std::filesystem::path(path).replace_extension(".xmf"));
-  }
-};
+using testing::TemporaryResults;
 
 const std::string kAllFields = R"(output={"stress": true, "strain": true})";
 
@@ -64,7 +52,7 @@ void expect_homogeneous(const std::string& h5, Index step, const Mat3& F, const 
 TEST(RunScene, UniaxialStressAndStrainReadBackMatchTheClosedForm) {
   const auto check = [](const std::string& material_json, const auto& model) {
     SCOPED_TRACE(material_json);
-    const TemporaryResults out;
+    const TemporaryResults out("run_scene");
     const RunResult r =
         run(load("uniaxial_block", {"bodies.0.material=" + material_json, kAllFields}), out.path);
     ASSERT_TRUE(r.success) << r.message;
@@ -97,7 +85,7 @@ TEST(RunScene, SimpleShearStressReadBackMatchesTheClosedForm) {
               R"(, -1], "hi": [2, )" + std::to_string(y + 0.1) + R"(, 2]}}})";
   const auto check = [&](const std::string& material_json, const auto& model) {
     SCOPED_TRACE(material_json);
-    const TemporaryResults out;
+    const TemporaryResults out("run_scene");
     const RunResult r = run(load("uniaxial_block", {"bodies.0.material=" + material_json,
                                                     "boundary=[" + layers + "]", kAllFields}),
                             out.path);
@@ -116,7 +104,7 @@ TEST(RunScene, SimpleShearStressReadBackMatchesTheClosedForm) {
 // time-dependent analysis, and the material depth is written only with material-depth contact.
 TEST(RunScene, OutputSectionAndPhysicsChooseTheFields) {
   const auto datasets = [](const std::vector<std::string>& overrides, const std::string& scene) {
-    const TemporaryResults out;
+    const TemporaryResults out("run_scene");
     const RunResult r = run(load(scene, overrides), out.path);
     EXPECT_TRUE(r.success) << r.message;
     std::string names;

@@ -4,6 +4,9 @@
 #include <filesystem>
 #include <fstream>
 
+#include <unistd.h>
+
+#include "apps/json_reader.hpp"
 #include "apps/scene.hpp"
 #include "core/error.hpp"
 
@@ -12,7 +15,9 @@ namespace {
 
 class SceneFileTest : public ::testing::Test {
  protected:
-  std::filesystem::path dir = std::filesystem::temp_directory_path() / "depthfem_scene_test";
+  // One folder per test process: ctest runs the tests of this suite in parallel processes.
+  std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("depthfem_scene_test_" + std::to_string(getpid()));
   void SetUp() override { std::filesystem::create_directories(dir); }
   void TearDown() override { std::filesystem::remove_all(dir); }
 
@@ -111,8 +116,9 @@ TEST_F(SceneFileTest, BadValuesAreNamed) {
   EXPECT_NE(error(replaced(kValid, "\"fixed\"", "\"glued\""))
                 .find("boundary[0].type: unknown boundary condition 'glued'"),
             std::string::npos);
-  EXPECT_NE(error(replaced(kValid, "\"generator\": \"box\"", "\"file\": \"missing.msh\""))
-                .find("missing.msh"),
+  EXPECT_NE(error(kValid, {parse_override(R"(bodies.0.mesh={"file": "missing.msh"})")})
+                .find("scene.json: bodies[0].mesh: " + (dir / "missing.msh").string() +
+                      ": cannot open file"),
             std::string::npos);
   EXPECT_NE(error("{\"bodies\": [").find("scene.json: invalid JSON"), std::string::npos);
 }
@@ -146,6 +152,35 @@ TEST_F(SceneFileTest, TimeIntegrationSettingsAreChecked) {
   EXPECT_NE(error(kValid, {parse_override("analysis=dynamic")})
                 .find("dynamic: missing required key for a dynamic analysis"),
             std::string::npos);
+  EXPECT_NE(error(kValid, set("dynamic", R"({"time_step": 1, "duration": 1,
+                                             "newmark": {"beta": 0.25}})"))
+                .find("dynamic.newmark: only for \"integrator\": \"newmark\""),
+            std::string::npos);
+  EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "newmark", "time_step": 1, "duration": 1,
+                                             "newmark": {"beta": 0.7}})"))
+                .find("dynamic.newmark.beta: must be in (0, 0.5]"),
+            std::string::npos);
+  EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "newmark", "time_step": 1, "duration": 1,
+                                             "newmark": {"gamma": 0.4}})"))
+                .find("dynamic.newmark.gamma: must be in [0.5, 1]"),
+            std::string::npos);
+  EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "arkode", "time_step": 1, "duration": 1,
+                                             "mass": "consistent"})"))
+                .find("dynamic.mass: a consistent mass matrix needs an implicit integrator"),
+            std::string::npos);
+}
+
+TEST_F(SceneFileTest, MooneyRivlinTakesYoungsModulusAndPoissonsRatio) {
+  const std::string mr = R"({"model": "mooney_rivlin", "youngs": 3e4, "poisson": 0.45, "C2": 1e3})";
+  const Scene s = load_scene(write(kValid), {parse_override("bodies.0.material=" + mr)});
+  const auto& m = std::get<MooneyRivlin>(s.groups.at(0).material);
+  EXPECT_NEAR(2 * (m.C1 + m.C2), 3e4 / 2.9, 1e-9);  // mu = E / (2 (1 + nu))
+  EXPECT_EQ(m.C2, 1e3);
+  EXPECT_NE(
+      error(kValid, {parse_override(R"(bodies.0.material={"model": "mooney_rivlin",
+                                             "youngs": 3e4, "poisson": 0.5})")})
+          .find("bodies[0].material.youngs: mooney_rivlin: Poisson's ratio must be in (-1, 0.5)"),
+      std::string::npos);
 }
 
 TEST_F(SceneFileTest, OverridesReachNestedKeys) {
@@ -163,6 +198,129 @@ TEST_F(SceneFileTest, OverridesReachNestedKeys) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/scene.json: cannot open scene file"),
               std::string::npos);
   }
+}
+
+// Every integer is read in 64 bits and refused, with its key, when it does not fit.
+TEST_F(SceneFileTest, IntegersAboveTwoToThe31AreRefusedNotTruncated) {
+  EXPECT_NE(error(replaced(kValid, "\"cells\": [1,1,1]", "\"cells\": [4294967336,1,1]"))
+                .find("scene.json: bodies[0].mesh.cells: integer 4294967336 is out of range"),
+            std::string::npos);
+  EXPECT_NE(error(kValid, {parse_override("solver.max_newton_iterations=4294967297")})
+                .find("solver.max_newton_iterations: integer 4294967297 is out of range"),
+            std::string::npos);
+  EXPECT_NE(error(kValid, {parse_override("boundary.0.nodes={\"list\": [18446744073709551615]}")})
+                .find("boundary[0].nodes.list: expected node indices in [0, 2147483647]"),
+            std::string::npos);
+}
+
+TEST_F(SceneFileTest, MeshesTooLargeAreRefusedBeforeAllocating) {
+  // 6e15 tets: the cell product overflows 32 and 64-bit ints.
+  EXPECT_NE(error(replaced(kValid, "\"cells\": [1,1,1]", "\"cells\": [100000,100000,100000]"))
+                .find("bodies[0].mesh.cells: gives 1e+15 nodes and 6e+15 tets, more than the "
+                      "2147483647"),
+            std::string::npos);
+  // 3.2e8 nodes fit an index, but not the memory of any machine this runs on (320 GB at 1 kB
+  // per node).
+  EXPECT_NE(error(replaced(kValid, "\"cells\": [1,1,1]", "\"cells\": [800,800,500]"))
+                .find("scene.json: bodies: the "
+                      "generated meshes"),
+            std::string::npos);
+  // Two bodies that fit one by one (1.8e9 tets each) but not together.
+  const auto big = [](const std::string& name) {
+    return R"({"name": ")" + name + R"(", "mesh": {"generator": "box", "lo": [0,0,0],
+               "hi": [1,1,1], "cells": [1000,1000,300]}, "rigid": true})";
+  };
+  EXPECT_NE(error(kValid, {parse_override("bodies=[" + big("c") + "," + big("d") + "]")})
+                .find("scene.json: bodies: the generated meshes have"),
+            std::string::npos);
+}
+
+TEST_F(SceneFileTest, StepCountsAreBounded) {
+  EXPECT_NE(error(kValid, {parse_override("analysis=dynamic"),
+                           parse_override(R"(dynamic={"time_step": 1e-9, "duration": 1000})")})
+                .find("dynamic.time_step: duration / time_step asks for 1e+12 steps, more than "
+                      "the 1000000 a results file holds"),
+            std::string::npos);
+}
+
+TEST_F(SceneFileTest, NonFiniteScalesAreErrorsNamingTheKey) {
+  // Young's modulus 1e150 is finite, but with a coarse tolerance the Newton tolerance is not.
+  const std::string nh =
+      R"(bodies.0.material={"model": "neo_hookean", "youngs": 1e150, "poisson": 0.3})";
+  EXPECT_NE(error(kValid, {parse_override(nh), parse_override("solver.tolerance=1e200")})
+                .find("scene.json: solver.tolerance: the Newton tolerance (tolerance x E h^2 "
+                      "sqrt(#dofs)) is inf N"),
+            std::string::npos);
+  // Young's modulus 1e308: the force scale E h^2 itself overflows.
+  EXPECT_NE(error(kValid, {parse_override(R"(bodies.0.material={"model": "mooney_rivlin",
+                                             "youngs": 1e308, "poisson": 0.3})")})
+                .find("scene.json: bodies[0].material: the Newton tolerance"),
+            std::string::npos);
+  EXPECT_NE(error(kValid, {parse_override("bodies.0.mesh.lo=[-1e308,0,0]"),
+                           parse_override("bodies.0.mesh.hi=[1e308,1,1]")})
+                .find("bodies[0].mesh.hi: must be finite, and so must hi - lo"),
+            std::string::npos);
+}
+
+TEST_F(SceneFileTest, JsonIsBoundedAndStrict) {
+  const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+  EXPECT_NE(error("{\"name\": " + deep + "}").find("scene.json:1: nested more than 64 levels"),
+            std::string::npos);
+  EXPECT_NE(error(kValid, {parse_override("gravity=" + deep)})
+                .find("scene.json: --set gravity:1: nested more than 64 levels"),
+            std::string::npos);
+  EXPECT_NE(
+      error(std::string(kMaxJsonBytes + 1, ' ')).find("scene.json: more than the 16777216 bytes"),
+      std::string::npos);
+  EXPECT_NE(error(replaced(kValid, "\"C2\": 1", "\"C2\": 1, \"C1\": 2"))
+                .find("scene.json: bodies[0].material.C1: duplicate key"),
+            std::string::npos);
+  EXPECT_NE(error("{\"bodies\": [1,").find("scene.json: invalid JSON: parse error at line 1"),
+            std::string::npos);
+}
+
+TEST_F(SceneFileTest, EveryErrorNamesTheSceneFileAndKey) {
+  // Generator parameters, at the key of the scene.
+  EXPECT_NE(error(replaced(kValid, "\"cells\": [1,1,1]", "\"cells\": [0,1,1]"))
+                .find("scene.json: bodies[0].mesh.cells: must be >= 1 along every axis"),
+            std::string::npos);
+  EXPECT_NE(error(kValid, {parse_override("bodies.0.mesh.cells=[40,1,1]"),
+                           parse_override("bodies.0.mesh.ratio=[1e10,1,1]")})
+                .find("scene.json: bodies[0].mesh.ratio: ratio^cells overflows along axis 0"),
+            std::string::npos);
+  // A generated mesh moved so far that round-off flattens its elements.
+  EXPECT_NE(error(kValid, {parse_override("bodies.0.mesh.translate=[1e20,0,0]")})
+                .find("scene.json: bodies[0].mesh: the scaled and translated mesh: element 0 is "
+                      "degenerate"),
+            std::string::npos);
+  EXPECT_NE(error(kValid, {parse_override("bodies.99999999999999999999999.name=x")})
+                .find("scene.json: --set bodies.99999999999999999999999.name: index "
+                      "99999999999999999999999 out of range"),
+            std::string::npos);
+  EXPECT_NE(error(kValid, {parse_override("boundary.0.nodes={\"list\": [99]}")})
+                .find("scene.json: boundary[0].nodes.list: node 99 is outside 0..7"),
+            std::string::npos);
+  EXPECT_NE(error(kValid, {parse_override(R"(boundary.0={"type": "rotated", "axis": [0,0,0],
+                                             "center": [0,0,0], "angle_deg": 90,
+                                             "nodes": {"body": "b"}})")})
+                .find("scene.json: boundary[0].axis: must be a non-zero vector"),
+            std::string::npos);
+  // x = 0 and x = 0.5 on the same nodes.
+  const std::string fixed = R"({"type": "plane", "normal": [1,0,0],
+                                "nodes": {"plane": {"normal": [1,0,0]}}})";
+  const std::string moved = R"({"type": "plane", "normal": [1,0,0], "offset": 0.5,
+                                "nodes": {"plane": {"normal": [1,0,0]}}})";
+  EXPECT_NE(error(kValid, {parse_override("boundary=[" + fixed + "," + moved + "]")})
+                .find("scene.json: boundary: boundary conditions on node 0 contradict each other"),
+            std::string::npos);
+}
+
+TEST_F(SceneFileTest, WholeSceneIsCheckedBeforeAnyMeshIsRead) {
+  // The mesh file does not exist, but the misspelt solver key is reported first: no mesh is
+  // read or generated before every key has been checked.
+  const std::string m = error(kValid, {parse_override(R"(bodies.0.mesh={"file": "missing.msh"})"),
+                                       parse_override("solver.tolerence=1")});
+  EXPECT_NE(m.find("scene.json: solver.tolerence: unknown key"), std::string::npos) << m;
 }
 
 }  // namespace

@@ -147,8 +147,7 @@ TEST(StaticScenes, BucklingColumnLeavesTheStraightBranch) {
 // A load that cannot be reached (shortening the unit block by 1.5) stops with a clear error once
 // the increment falls below its minimum; the completed increments stay readable in the file.
 TEST(StaticScenes, FailedRunKeepsCompletedIncrements) {
-  const std::string out =
-      (std::filesystem::temp_directory_path() / "depthfem_failed_run.h5").string();
+  const std::string out = testing::temp_path("failed_run.h5");
   const Scene s = load("uniaxial_block", {"boundary.3.offset=-1.5", "solver.min_increment=0.01"});
   const RunResult r = run(s, out);
   EXPECT_FALSE(r.success);
@@ -196,8 +195,7 @@ TEST(StaticScenes, RampedGravityGivesTheEquilibriumOfEveryIncrement) {
 // constrained direction belongs to one condition, so the reaction rows sum to minus the
 // applied load (the weight) and each symmetry plane carries force along its normal only.
 TEST(StaticScenes, ReactionsOfAQuarterModelSumToTheAppliedLoad) {
-  const std::string path =
-      (std::filesystem::temp_directory_path() / "depthfem_quarter.json").string();
+  const std::string path = testing::temp_path("quarter.json");
   std::ofstream(path) << R"({
     "gravity": [0, 0, -9.81],
     "bodies": [{"name": "quarter", "mesh": {"generator": "box", "lo": [0, 0, 0], "hi": [0.5, 0.5, 0.3], "cells": [5, 5, 3]},

@@ -139,6 +139,8 @@ constexpr const char* kTetgenEle1 = R"(# tets
 )";
 
 // OBJ with a quad, every slash form, a w coordinate, negative indices and ignored statements.
+// A closed pyramid, every face oriented outward: the square base (line 13, normal -z) and four
+// sides (lines 15, 16, 18, 19).
 constexpr const char* kObj = R"(# square and pyramid
 mtllib a.mtl
 o thing
@@ -151,12 +153,13 @@ vn 0 0 1
 g grp
 s off
 usemtl m
-f 1/1/1 2/1/1 3/1/1 4/1/1
+f 1/1/1 4/1/1 3/1/1 2/1/1
 v 0.5 0.5 1
 f -5//1 -4//1 -1//1
 f 2/1 3/1 5/1
 l 1 2
-f 3 4 5  # last face
+f 3 4 5  # side
+f 4 1 5  # last face
 )";
 
 std::vector<std::string> split_lines(const std::string& text) {
@@ -565,12 +568,13 @@ TEST_F(ReadersTest, ObjReadsQuadsSlashFormsAndNegativeIndices) {
       1, 1, 0,   //
       0, 1, 0,   //
       0.5, 0.5, 1;
-  TriIndices F(5, 3);
-  F << 0, 1, 2,  // quad 1 2 3 4 as a fan
-      0, 2, 3,   //
+  TriIndices F(6, 3);
+  F << 0, 3, 2,  // quad 1 4 3 2 as a fan
+      0, 2, 1,   //
       0, 1, 4,   // -5 -4 -1 with 5 vertices defined
       1, 2, 4,   //
-      2, 3, 4;
+      2, 3, 4,   //
+      3, 0, 4;
   EXPECT_TRUE(surface.V == V) << surface.V;
   EXPECT_TRUE(surface.F == F) << surface.F;
 }
@@ -643,6 +647,95 @@ TEST_F(ReadersTest, ObjWithoutFacesIsAnError) {
 TEST_F(ReadersTest, ObjMissingFileIsAnError) {
   const std::string file = path("missing.obj");
   EXPECT_TRUE(throws_input_error([&] { read_obj(file); }, {"missing.obj", "cannot open"}));
+}
+
+// A surface that does not bound a solid is refused with the line of the face at fault.
+TEST_F(ReadersTest, ObjOpenSurfaceIsAnError) {
+  const std::string file = write("open.obj", first_lines(kObj, 18));  // no face 4 1 5
+  EXPECT_TRUE(throws_input_error([&] { read_obj(file); }, {"open.obj:", "the surface is open"}));
+}
+
+TEST_F(ReadersTest, ObjNonManifoldEdgeIsAnError) {
+  // A fin: a second pyramid side on edge (1 2), which the base and a side already share.
+  const std::string file = write("fin.obj", kObj + std::string("v 0.5 -1 0.5\nf 1 6 2\nf 2 6 1\n"));
+  EXPECT_TRUE(throws_input_error([&] { read_obj(file); },
+                                 {"fin.obj:2", "third face on edge (1 2)", "not manifold"}));
+}
+
+TEST_F(ReadersTest, ObjNonManifoldVertexIsAnError) {
+  // Two closed pyramids touching at their apex (vertex 5): every edge is shared twice, but the
+  // faces around vertex 5 form two fans.
+  const std::string file = write("bowtie.obj", kObj + std::string(R"(v 0 0 2
+v 1 0 2
+v 1 1 2
+v 0 1 2
+f 6 7 8 9
+f 6 5 7
+f 7 5 8
+f 8 5 9
+f 9 5 6
+)"));
+  EXPECT_TRUE(throws_input_error([&] { read_obj(file); },
+                                 {"bowtie.obj:", "vertex 5", "more than one fan"}));
+}
+
+TEST_F(ReadersTest, ObjInconsistentOrientationIsAnError) {
+  const std::string file = write("flip.obj", replace_line(kObj, 16, "f 2 5 3"));
+  EXPECT_TRUE(
+      throws_input_error([&] { read_obj(file); }, {"flip.obj:", "not consistently oriented"}));
+}
+
+TEST_F(ReadersTest, ObjDegenerateFaceIsAnError) {
+  const std::string repeated = write("repeat.obj", replace_line(kObj, 16, "f 2 3 3"));
+  EXPECT_TRUE(
+      throws_input_error([&] { read_obj(repeated); }, {"repeat.obj:16:", "face 3 is degenerate"}));
+  // Apex moved onto the base edge (1 2): the side 1 2 5 has zero area.
+  const std::string flat = write("flat.obj", replace_line(kObj, 14, "v 0.5 0 0"));
+  EXPECT_TRUE(
+      throws_input_error([&] { read_obj(flat); }, {"flat.obj:15:", "face 2 is degenerate"}));
+}
+
+TEST_F(ReadersTest, ReadTetMeshExplainsThatObjIsASurface) {
+  const std::string file = write("shape.obj", kObj);
+  EXPECT_TRUE(throws_input_error([&] { read_tet_mesh(file); },
+                                 {"shape.obj", "triangle surface, not a tetrahedral mesh"}));
+}
+
+// ---- Checks every reader shares (validate_and_orient) ------------------------------------------
+
+TEST_F(ReadersTest, TetListedTwiceIsAnError) {
+  // Element 5 (line 23) repeats element 4 (line 22) with its nodes in another order.
+  const std::string file =
+      write("twice.msh", replace_line(replace_line(kMsh22, 17, "6"), 22,
+                                      "5 4 2 1 1 7 300 12 9\n6 4 2 1 1 12 50 300 7"));
+  EXPECT_TRUE(throws_input_error(
+      [&] { read_gmsh(file); },
+      {"twice.msh:23:", "element 2 (line 23) repeats the nodes of element 0 (line 21)"}));
+}
+
+TEST_F(ReadersTest, OverlappingTetsAreAnError) {
+  // Node 4 mirrored through face (1, 2, 3) onto node 0's side: tet 1 folds over tet 0.
+  std::string ele = "2 4 0\n0 0 1 2 3\n1 1 2 3 4\n";
+  const std::string node =
+      write("fold.node", "5 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n4 0.1 0.1 0.1\n");
+  write("fold.ele", ele);
+  EXPECT_TRUE(
+      throws_input_error([&] { read_tetgen(node); },
+                         {"fold.ele:3:", "element 1 (line 3) overlaps element 0 (line 2)"}));
+  // A third tet on face (1, 2, 3).
+  write("fold.node", "6 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n4 1 1 1\n5 2 2 2\n");
+  write("fold.ele", "3 4 0\n0 0 1 2 3\n1 1 2 3 4\n2 1 2 3 5\n");
+  EXPECT_TRUE(throws_input_error([&] { read_tetgen(node); },
+                                 {"fold.ele:", "face (1 2 3) belongs to three or more elements"}));
+}
+
+TEST_F(ReadersTest, NodeOfNoTetIsAnError) {
+  // A sixth node that no element uses, at line 6 of the .node file.
+  const std::string node =
+      write("stray.node", "6 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n4 1 1 1\n5 9 9 9\n");
+  write("stray.ele", "2 4 0\n0 0 1 2 3\n1 1 2 3 4\n");
+  EXPECT_TRUE(throws_input_error([&] { read_tetgen(node); },
+                                 {"stray.node:7:", "node 5 belongs to no element"}));
 }
 
 }  // namespace

@@ -5,8 +5,10 @@
 #include <numeric>
 #include <random>
 
+#include "core/lumped_mass.hpp"
 #include "core/mesh_generators.hpp"
 #include "finite_differences.hpp"
+#include "integrators/consistent_mass.hpp"
 #include "integrators/elasticity.hpp"
 #include "integrators/inversion_step.hpp"
 #include "integrators/stiffness_tether.hpp"
@@ -98,6 +100,27 @@ TEST(Tethers, StiffnessTetherIsTheElasticHessianAtTheStepStart) {
   const Eigen::MatrixXd expected = 50.0 * 0.01 * Eigen::MatrixXd(K.to_sparse());
   EXPECT_LE((Eigen::MatrixXd(H.to_sparse()) - expected).cwiseAbs().maxCoeff(),
             1e-12 * expected.cwiseAbs().maxCoeff());
+}
+
+// The consistent mass matrix: derivatives of its tether, rows summing to the lumped masses, and
+// the kinetic energy of a rigid translation, 1/2 m |v|^2.
+TEST(Tethers, ConsistentMassRowsSumToTheLumpedMasses) {
+  const TetMesh m = box_mesh({Vec3::Zero(), Vec3(0.2, 0.1, 0.1), Eigen::Vector3i(2, 1, 1)});
+  const Index n = static_cast<Index>(m.X.rows());
+  const VectorX density = VectorX::LinSpaced(m.tets.rows(), 900, 1100);
+  ConsistentMass mass("inertia", m.X, m.tets, density, 3.0);
+  BlockSparseMatrix H = bound_pattern(mass, n);
+  mass.set_scale(2.0);
+  mass.set_anchor(m.X + random_points(n, 7, 0.01));
+  expect_derivatives(mass, m.X + random_points(n, 8, 0.01), H);
+  // Row sums: H / (s factor) times the unit x translation gives the lumped masses on x dofs.
+  VectorX ones_x = VectorX::Zero(3 * n), row_sums;
+  ones_x(Eigen::seq(0, 3 * n - 1, 3)).setOnes();
+  H.multiply(ones_x, row_sums);
+  const VectorX lumped = lumped_mass(m.X, m.tets, density);
+  for (Index i = 0; i < n; ++i) EXPECT_NEAR(row_sums(3 * i) / 6.0, lumped(i), 1e-12 * lumped(i));
+  const Points v = Vec3(0.3, -1, 2).transpose().replicate(n, 1);
+  EXPECT_NEAR(mass.quadratic_form(v), 3.0 * 0.5 * lumped.sum() * 5.09, 1e-12 * lumped.sum());
 }
 
 // Random tets and directions: the returned step zeroes det(Ds + a dDs), det stays positive on a
