@@ -12,6 +12,7 @@
 #include "core/error.hpp"
 #include "core/results_file.hpp"
 #include "integrators/arkode_stepper.hpp"
+#include "integrators/element_fields.hpp"
 #include "integrators/implicit_stepper.hpp"
 #include "integrators/static_solver.hpp"
 #include "integrators/symplectic_euler.hpp"
@@ -26,6 +27,30 @@ std::string format(const char* fmt, auto... args) {
   char buf[256];
   std::snprintf(buf, sizeof buf, fmt, args...);
   return buf;
+}
+
+/// What the results file writes per step: the scene's output section, velocities for
+/// time-dependent analyses, contact fields where material-depth or obstacle contact fills them.
+ResultFields result_fields(const Scene& scene) {
+  ResultFields fields = scene.output;
+  fields.velocity = scene.analysis != "static";
+  fields.contact =
+      fields.contact && (scene.contact == ContactModel::kMaterialDepth || !scene.obstacles.empty());
+  return fields;
+}
+
+/// Per body: the names of its materials ("rigid" for a rigid body).
+std::vector<std::string> body_materials(const Scene& scene) {
+  std::vector<std::string> out(scene.mesh.bodies.size());
+  for (const ElasticGroup& g : scene.groups) {
+    if (g.tets.empty()) continue;
+    std::string& names = out[static_cast<size_t>(scene.mesh.tet_body(g.tets.front()))];
+    const std::string name = material_name(g.material);
+    if (names.find(name) == std::string::npos) names += (names.empty() ? "" : ", ") + name;
+  }
+  for (size_t b = 0; b < out.size(); ++b)
+    if (scene.rigid[b]) out[b] = "rigid";
+  return out;
 }
 
 }  // namespace
@@ -63,8 +88,16 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
 
   // Open the results.
   std::unique_ptr<ResultsFile> file;
+  const ResultFields fields = result_fields(scene);
   if (!options.out.empty()) {
-    RunInfo info{scene.json_text, kVersion, scene.analysis, threads, {}};
+    RunInfo info{scene.json_text,
+                 kVersion,
+                 scene.analysis,
+                 threads,
+                 {},
+                 body_materials(scene),
+                 fields,
+                 fields.velocity ? scene.initial_velocity : Points()};
     for (const Constraint& c : scene.constraints) info.constraint_names.push_back(c.name);
     file = std::make_unique<ResultsFile>(options.out, mesh, model->depth, info);
   }
@@ -80,7 +113,16 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
         int(step.index), v ? "time" : "load", step.load, step.settling ? " (settle)" : "",
         step.newton_iterations, step.linear_iterations, step.residuals.back(), step.energy,
         step.seconds);
-    if (file) file->append_step(step, x, v);
+    if (file) {
+      ElementFields elements;
+      if (fields.stress || fields.strain) {
+        PhaseTimers::Scope t(result.timers, "output: element fields");
+        elements =
+            element_fields(mesh.X, mesh.tets, scene.groups, x, {fields.stress, fields.strain});
+      }
+      PhaseTimers::Scope t(result.timers, "output: results file");
+      file->append_step(step, x, v, &elements);
+    }
     result.steps.push_back(step);
     if (options.observer) options.observer(step, x);
   };

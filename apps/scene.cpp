@@ -610,6 +610,14 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
     for (size_t k = 0; k < list.size(); ++k) scene.obstacles.push_back(read_obstacle(list[k], k));
   }
   if (r.has("solver")) read_solver(r.object("solver"), scene);
+  if (r.has("output")) {
+    JsonObject o = r.object("output");
+    scene.output.displacement = o.boolean("displacement", true);
+    scene.output.stress = o.boolean("stress", false);
+    scene.output.strain = o.boolean("strain", false);
+    scene.output.contact = o.boolean("contact", true);
+    o.finish();
+  }
   if (r.has("dynamic")) {
     if (scene.analysis == "static") r.fail("dynamic", "only for a dynamic or quasistatic analysis");
     read_dynamic(r.object("dynamic"), scene);

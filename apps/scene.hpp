@@ -8,6 +8,7 @@
 #include "contact/material_depth_contact.hpp"
 #include "contact/obstacle_contact.hpp"
 #include "core/mesh.hpp"
+#include "core/xdmf_writer.hpp"
 #include "integrators/constraints.hpp"
 #include "integrators/dynamics.hpp"
 #include "integrators/elasticity.hpp"
@@ -41,6 +42,10 @@ struct Scene {
   DynamicOptions dynamic_options;  ///< analyses "dynamic" and "quasistatic"
   double viscosity = 0;            ///< [Pa s] of a quasistatic analysis
   Points initial_velocity;         ///< #nodes x 3 [m/s]
+  /// The "output" section: which fields the results file writes per step. `contact` asks for the
+  /// contact fields where the scene has material-depth or obstacle contact; `velocity` is not a
+  /// key (time-dependent analyses write velocities).
+  ResultFields output{.contact = true};
 };
 
 /// A `--set path=value` override: path segments separated by '.', array indices as numbers,

@@ -15,7 +15,8 @@ namespace depthfem {
 /// with self-contact, "a (self)".
 ///
 /// A row's force is the force on its first body, summed over the interface's pairs, and its
-/// magnitude the sum of the pair forces' magnitudes (pairs are found from both sides: a's
+/// magnitude the sum of the magnitudes of the forces added (per pair, or per penetrating
+/// triangle where the module nets a triangle's pairs; pairs are found from both sides: a's
 /// surface inside b and b's surface inside a; both push a the same way, so the magnitude is
 /// |force| where the pressure points one way, and for self-contact the force pressed across the
 /// fold). The area is the larger of the two penetrated surface areas (a coarse body whose tets

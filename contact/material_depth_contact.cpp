@@ -4,8 +4,10 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <algorithm>
 #include <functional>
 
+#include "contact/contact_surface.hpp"
 #include "contact/penalty.hpp"
 #include "core/lumped_mass.hpp"
 
@@ -164,16 +166,45 @@ void MaterialDepthContact::report(const Points& x, StepRecord& step) const {
       pair_derivatives(x, pairs_[k], gradients[k], nullptr);
   });
   ContactInterfaces::Tally tally = interfaces_.tally(step);
+  step.surface.resize(static_cast<Index>(tris_.rows()));
+  // A triangle's pairs are consecutive; their forces are netted per body the triangle enters, so
+  // that splitting a triangle among tets adds no force: the in-plane pulls of the pieces cancel.
+  struct Share {
+    Index body;
+    Vec3 force;
+    PolygonMoments moments;
+  };
+  std::vector<Share> shares;
+  const auto flush = [&](Index tri) {
+    for (const Share& s : shares) {
+      add_to_surface(step.surface, tri, s.force, s.moments);
+      tally.add(tri_body_(tri), s.body, s.force, s.moments.area);
+    }
+    shares.clear();
+  };
   for (Index k = 0; k < n; ++k) {  // in pair order: the same sums for any number of threads
     const ContactPair& p = pairs_[k];
+    if (k > 0 && p.tri != pairs_[k - 1].tri) flush(pairs_[k - 1].tri);
     // The penalty pushes the triangle out of the tet: -grad W on the triangle's side.
     const Vec3 on_triangle = -gradients[k].tail<9>().reshaped(3, 3).rowwise().sum();
-    double area = 0;
-    for (int j = 1; j + 1 < p.polygon.size; ++j)
-      area +=
-          0.5 * (p.polygon.x[j] - p.polygon.x[0]).cross(p.polygon.x[j + 1] - p.polygon.x[0]).norm();
-    tally.add(tri_body_(p.tri), tet_body_(p.tet), on_triangle, area);
+    // Material depth at the polygon's vertices: the tet's linear depth field g0 + a . (R - P0).
+    std::array<V3<double>, 4> P;
+    for (int a = 0; a < 4; ++a) P[a] = make_point<double>(x.row(tets_(p.tet, a)), 0);
+    const std::array<double, 4> g = pair_depths(p);
+    const V3<double> slope = depth_gradient(P, g);
+    std::array<double, 8> G{};
+    for (int j = 0; j < p.polygon.size; ++j)
+      G[j] = g[0] + slope.dot(make_point<double>(p.polygon.x[j], 0) - P[0]);
+    const PolygonMoments moments = polygon_moments(p.polygon, G);
+    const Index body = tet_body_(p.tet);
+    auto share =
+        std::find_if(shares.begin(), shares.end(), [&](const Share& s) { return s.body == body; });
+    if (share == shares.end()) share = shares.insert(shares.end(), {body, Vec3::Zero(), {}});
+    share->force += on_triangle;
+    share->moments.area += moments.area;
+    share->moments.depth_integral += moments.depth_integral;
   }
+  if (n > 0) flush(pairs_[n - 1].tri);
   tally.finish();
 }
 

@@ -49,7 +49,9 @@ class MaterialDepthContact final : public ForceModule {
   double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
   /// One row per interface (ContactInterfaces): every pair of bodies "a/b" and, with
   /// self-contact, every body against itself "a (self)"; areas are those of the clipped
-  /// triangles.
+  /// triangles. A triangle's pairs are netted per body it enters (the in-plane pulls of the
+  /// pieces a triangle is cut into cancel), and each net force, with its area and depth
+  /// integral, goes to the interface's row and to the triangle in step.surface.
   void report(const Points& x, StepRecord& step) const override;
 
   const std::vector<ContactPair>& pairs() const { return pairs_; }

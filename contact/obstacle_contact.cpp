@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "contact/contact_surface.hpp"
 #include "contact/penalty.hpp"
 #include "core/error.hpp"
 
@@ -57,6 +58,8 @@ ObstacleContact::ObstacleContact(const Mesh& mesh, const std::vector<Index>& bod
   tris_.resize(static_cast<Index>(rows.size()), 3);
   for (size_t k = 0; k < rows.size(); ++k)
     tris_.row(static_cast<Index>(k)) = mesh.tris.row(rows[k]);
+  tri_ids_ = rows;
+  num_mesh_tris_ = mesh.num_tris();
 }
 
 void ObstacleContact::set_load(double load) {
@@ -129,6 +132,7 @@ void ObstacleContact::report(const Points& x, StepRecord& step) const {
   const size_t first = step.contact.size();
   for (const Obstacle& o : obstacles_)
     step.contact.push_back({"obstacle " + o.name, Vec3::Zero(), 0, 0});
+  step.surface.resize(num_mesh_tris_);
   for (const auto& [o, f] : active_) {
     std::array<Vec3, 3> q;
     std::array<V3<double>, 3> Q;
@@ -140,12 +144,16 @@ void ObstacleContact::report(const Points& x, StepRecord& step) const {
     }
     InterfaceForce& row = step.contact[first + static_cast<size_t>(o)];
     const ClipPolygon p = clip_triangle_by_field(q, G);
-    for (int k = 1; k + 1 < p.size; ++k)
-      row.area += 0.5 * (p.x[k] - p.x[0]).cross(p.x[k + 1] - p.x[0]).norm();
+    std::array<double, 8> depth{};  // corners inside keep their depth, crossings have none
+    for (int k = 0; k < p.size; ++k)
+      if (p.vertex[k].kind == ClipVertex::Kind::kTriangleVertex) depth[k] = G[p.vertex[k].a];
+    const PolygonMoments moments = polygon_moments(p, depth);
     const Dual2<9> W = triangle_derivatives(x, o, f);  // the force on the triangle is -grad W
     const Vec3 on_triangle = -W.g.reshaped(3, 3).rowwise().sum();
+    row.area += moments.area;
     row.force += on_triangle;
     row.magnitude += on_triangle.norm();
+    add_to_surface(step.surface, tri_ids_[static_cast<size_t>(f)], on_triangle, moments);
   }
 }
 

@@ -47,7 +47,8 @@ class ObstacleContact final : public ForceModule {
   double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
 
   /// One row per obstacle, "obstacle NAME": the force it exerts on the bodies [N] (and its
-  /// magnitudes summed over triangles) and the boundary area inside it [m^2] at x.
+  /// magnitudes summed over triangles) and the boundary area inside it [m^2] at x; and each
+  /// triangle's share in step.surface.
   void report(const Points& x, StepRecord& step) const override;
 
  private:
@@ -58,6 +59,8 @@ class ObstacleContact final : public ForceModule {
   Dual2<9> triangle_derivatives(const Points& x, Index o, Index f) const;
 
   TriIndices tris_;
+  std::vector<Index> tri_ids_;  // mesh triangle of each row of tris_
+  Index num_mesh_tris_ = 0;
   std::vector<Obstacle> obstacles_;
   double load_ = 0;
   std::vector<std::pair<Index, Index>> active_;  // (obstacle, triangle) with some corner inside

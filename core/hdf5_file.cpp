@@ -31,6 +31,22 @@ Handle unlocked_access(const std::string& path) {
 
 H5File H5File::create(const std::string& path) {
   const Handle access = unlocked_access(path);
+  // A flush visits every entry of HDF5's metadata cache, which by default grows to megabytes
+  // over a long run, so flushing after every step would cost more and more. The writer closes
+  // each object right after writing it: a fixed cache of 256 KiB (the metadata of about ten
+  // steps) keeps the cost per step flat (bench/bench_results_file.cpp, BM_LongRun).
+  H5AC_cache_config_t cache;
+  cache.version = H5AC__CURR_CACHE_CONFIG_VERSION;
+  if (H5Pget_mdc_config(access.id(), &cache) < 0)
+    throw InputError(located(path, 0, "cannot set up HDF5 file access"));
+  cache.set_initial_size = true;
+  cache.initial_size = cache.max_size = 256 * 1024;
+  cache.min_size = 128 * 1024;
+  cache.incr_mode = H5C_incr__off;
+  cache.flash_incr_mode = H5C_flash_incr__off;
+  cache.decr_mode = H5C_decr__off;
+  if (H5Pset_mdc_config(access.id(), &cache) < 0)
+    throw InputError(located(path, 0, "cannot set up HDF5 file access"));
   return H5File(path, H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, access.id()),
                 "cannot create results file");
 }
@@ -66,6 +82,42 @@ void H5File::create_group(const std::string& name) const {
 
 void H5File::remove(const std::string& name) const {
   check(H5Ldelete(file_.id(), name.c_str(), H5P_DEFAULT), "cannot remove " + name);
+}
+
+void H5File::create_zeros(const std::string& name, const std::vector<hsize_t>& dims) const {
+  const std::string what = "cannot write " + name;
+  const Handle space =
+      handle(H5Screate_simple(int(dims.size()), dims.data(), nullptr), H5Sclose, what);
+  handle(H5Dcreate2(file_.id(), name.c_str(), H5Type<double>::file(), space.id(), H5P_DEFAULT,
+                    H5P_DEFAULT, H5P_DEFAULT),
+         H5Dclose, what);
+}
+
+void H5File::create_row_view(const std::string& name, const std::string& source, hsize_t first_row,
+                             hsize_t num_rows) const {
+  const std::string what = "cannot write " + name + " (a view of " + source + ")";
+  const Handle source_set =
+      handle(H5Dopen2(file_.id(), source.c_str(), H5P_DEFAULT), H5Dclose, what);
+  const Handle source_space = handle(H5Dget_space(source_set.id()), H5Sclose, what);
+  const Handle type = handle(H5Dget_type(source_set.id()), H5Tclose, what);
+  std::vector<hsize_t> dims(check(H5Sget_simple_extent_ndims(source_space.id()), what));
+  check(H5Sget_simple_extent_dims(source_space.id(), dims.data(), nullptr), what);
+  if (dims.empty() || first_row + num_rows > dims[0]) fail(what + ": rows out of range");
+  std::vector<hsize_t> start(dims.size(), 0), count = dims;
+  start[0] = first_row;
+  count[0] = num_rows;
+  check(H5Sselect_hyperslab(source_space.id(), H5S_SELECT_SET, start.data(), nullptr, count.data(),
+                            nullptr),
+        what);
+  const Handle view_space =
+      handle(H5Screate_simple(int(count.size()), count.data(), nullptr), H5Sclose, what);
+  const Handle properties = handle(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, what);
+  // "." is this file, so that the view follows the file when it is renamed or moved.
+  check(H5Pset_virtual(properties.id(), view_space.id(), ".", source.c_str(), source_space.id()),
+        what);
+  handle(H5Dcreate2(file_.id(), name.c_str(), type.id(), view_space.id(), H5P_DEFAULT,
+                    properties.id(), H5P_DEFAULT),
+         H5Dclose, what);
 }
 
 void H5File::write_strings(const std::string& name, const std::vector<std::string>& values) const {

@@ -81,6 +81,13 @@ class H5File {
                 {hsize_t(row_major.rows()), hsize_t(row_major.cols())}, row_major.data());
     }
   }
+  /// Creates a dataset of `dims` doubles that reads as zeros and takes no space in the file: it
+  /// is never written, so HDF5 allocates no storage and returns its fill value 0.
+  void create_zeros(const std::string& name, const std::vector<hsize_t>& dims) const;
+  /// Creates `name` as a view of rows [first_row, first_row + num_rows) of dataset `source` of
+  /// this file (an HDF5 virtual dataset: it holds no data, readers see the source's values).
+  void create_row_view(const std::string& name, const std::string& source, hsize_t first_row,
+                       hsize_t num_rows) const;
   /// Writes a 1D dataset of variable-length strings.
   void write_strings(const std::string& name, const std::vector<std::string>& values) const;
 

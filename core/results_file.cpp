@@ -2,11 +2,10 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 
 #include "core/error.hpp"
 #include "core/hdf5_file.hpp"
-#include "core/text_parsing.hpp"
-#include "core/xdmf_writer.hpp"
 
 namespace depthfem {
 namespace {
@@ -31,18 +30,108 @@ std::string step_group(Index index) {
   return "/steps/" + step_name(index);
 }
 
+/// Per-node and per-tet datasets a state group may hold, by the rows they have.
+constexpr const char* kNodeDatasets[] = {"x", "displacement", "v"};
+constexpr const char* kTetDatasets[] = {"stress", "von_mises", "strain", "volume_ratio"};
+
+/// The sidecar's blocks: the whole mesh when it has one body (its datasets are the scene's),
+/// else one per body with its own views. Regions of a body (once meshes carry them) would add a
+/// block each here, with the body's nodes and the region's range of tets.
+std::vector<SidecarBlock> sidecar_blocks(const Mesh& mesh,
+                                         const std::vector<std::string>& materials) {
+  std::vector<SidecarBlock> blocks;
+  for (size_t b = 0; b < mesh.bodies.size(); ++b) {
+    const Body& body = mesh.bodies[b];
+    const std::string name =
+        b < materials.size() ? body.name + " (" + materials[b] + ")" : body.name;
+    const std::string path = mesh.bodies.size() == 1 ? "" : "blocks/" + std::to_string(b) + "/";
+    blocks.push_back({name, path, body.num_nodes, body.num_tets});
+  }
+  return blocks;
+}
+
+/// Pressure, traction, gap and contact fraction per boundary triangle from the step's sums,
+/// per unit of the triangle's current area A (so that their integrals over the boundary are
+/// the sums): pressure = magnitude / A, traction = force / A, gap = depth integral / contact
+/// area (0 without contact), fraction = contact area / A.
+struct SurfaceFields {
+  VectorX pressure, gap, fraction;
+  Eigen::Matrix<double, Eigen::Dynamic, 3> traction;
+};
+SurfaceFields surface_fields(const TriIndices& tris, const Points& x, const SurfaceContact& s) {
+  const Index n = static_cast<Index>(tris.rows());
+  SurfaceFields out{VectorX::Zero(n), VectorX::Zero(n), VectorX::Zero(n),
+                    Eigen::Matrix<double, Eigen::Dynamic, 3>::Zero(n, 3)};
+  for (Index f = 0; f < n; ++f) {
+    const Vec3 a = x.row(tris(f, 0)), b = x.row(tris(f, 1)), c = x.row(tris(f, 2));
+    const double area = 0.5 * (b - a).cross(c - a).norm();
+    if (!(area > 0) || !(s.area(f) > 0)) continue;
+    out.pressure(f) = s.magnitude(f) / area;
+    out.traction.row(f) = s.force.row(f) / area;
+    out.gap(f) = s.depth_integral(f) / s.area(f);
+    out.fraction(f) = s.area(f) / area;
+  }
+  return out;
+}
+
+/// The values a step shows in ParaView as field data.
+std::vector<StepValue> step_values(const StepRecord& step, bool velocity,
+                                   const std::vector<std::string>& constraint_names) {
+  std::vector<StepValue> out{{"step", {double(step.index)}},
+                             {"load", {step.load}},
+                             {"settling", {double(step.settling)}},
+                             {"newton_iterations", {double(step.newton_iterations)}},
+                             {"linear_iterations", {double(step.linear_iterations)}},
+                             {"residual", {step.residuals.empty() ? 0.0 : step.residuals.back()}},
+                             {"energy", {step.energy}}};
+  if (velocity) out.push_back({"kinetic_energy", {step.kinetic_energy}});
+  for (size_t k = 0; k < constraint_names.size(); ++k) {
+    const auto r = step.reactions.row(Eigen::Index(k));
+    out.push_back({"reaction " + constraint_names[k], {r(0), r(1), r(2)}});
+  }
+  if (!step.contact.empty()) out.push_back({"contact_area", {step.contact_area()}});
+  for (const InterfaceForce& c : step.contact) {
+    out.push_back({"contact_force " + c.name, {c.force(0), c.force(1), c.force(2)}});
+    out.push_back({"contact_force_magnitude " + c.name, {c.magnitude}});
+    out.push_back({"contact_area " + c.name, {c.area}});
+  }
+  return out;
+}
+
 }  // namespace
 
 struct ResultsFile::State {
   H5File file;
-  std::string xmf_path;  ///< the sidecar
-  std::string h5_name;   ///< file name of the results file, as the sidecar refers to it
-  Index num_nodes = 0, num_tets = 0, num_constraints = 0;
-  std::vector<SidecarStep> steps;
+  Points X;  ///< reference positions, for displacements
+  Index num_tets = 0;
+  TriIndices tris;
+  std::vector<Body> bodies;
+  RunInfo info;
+  std::vector<SidecarBlock> blocks;
+  std::optional<XdmfSidecar> sidecar;
+  Index num_steps = 0;
+  Index settling_steps = 0;
   std::vector<std::string> contact_names;  ///< of the first step; later steps must match
 
-  void write_sidecar() const {
-    write_file_atomically(xmf_path, xdmf_text(h5_name, num_nodes, num_tets, steps));
+  Index num_nodes() const { return static_cast<Index>(X.rows()); }
+
+  /// Row views blocks/<b>/NAME of every node and tet dataset of `group`, for the sidecar.
+  void write_block_views(const std::string& group) const {
+    if (blocks.size() < 2) return;
+    file.create_group(group + "/blocks");
+    for (size_t b = 0; b < blocks.size(); ++b) {
+      const std::string here = group + "/" + blocks[b].path;
+      file.create_group(here.substr(0, here.size() - 1));
+      const Body& body = bodies[b];
+      for (const char* name : kNodeDatasets)
+        if (file.exists(group + "/" + name))
+          file.create_row_view(here + name, group + "/" + name, hsize_t(body.first_node),
+                               hsize_t(body.num_nodes));
+      for (const char* name : kTetDatasets)
+        if (file.exists(group + "/" + name))
+          file.create_row_view(here + name, group + "/" + name, hsize_t(body.first_tet),
+                               hsize_t(body.num_tets));
+    }
   }
 };
 
@@ -55,15 +144,25 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
     throw InputError(located(path, 0,
                              "depth has " + std::to_string(depth.size()) + " values, the mesh " +
                                  std::to_string(mesh.num_nodes()) + " nodes"));
-  state_ = std::make_unique<State>(
-      State{H5File::create(path),
-            std::filesystem::path(fs_path).replace_extension(".xmf").string(),
-            fs_path.filename().string(),
-            mesh.num_nodes(),
-            mesh.num_tets(),
-            static_cast<Index>(info.constraint_names.size()),
-            {}});
-  const H5File& f = state_->file;
+  if (info.fields.velocity && info.initial_velocity.rows() != mesh.num_nodes())
+    throw InputError(located(path, 0,
+                             "the initial velocity has " +
+                                 std::to_string(info.initial_velocity.rows()) + " rows, the mesh " +
+                                 std::to_string(mesh.num_nodes()) + " nodes"));
+  state_ = std::make_unique<State>(State{H5File::create(path),
+                                         mesh.X,
+                                         mesh.num_tets(),
+                                         mesh.tris,
+                                         mesh.bodies,
+                                         info,
+                                         sidecar_blocks(mesh, info.body_materials),
+                                         {},
+                                         0,
+                                         0,
+                                         {}});
+  State& s = *state_;
+  const H5File& f = s.file;
+  const ResultFields& fields = info.fields;
 
   f.create_group("/mesh");
   f.write_array("/mesh/X", mesh.X);
@@ -71,10 +170,26 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
   f.write_array("/mesh/tris", mesh.tris);
   f.write_array("/mesh/tet_body", mesh.tet_body);
   f.write_array("/mesh/tri_body", mesh.tri_body);
-  f.write_array("/mesh/depth", depth.size() != 0 ? depth : VectorX::Zero(mesh.num_nodes()).eval());
+  f.write_array("/mesh/tri_tet", mesh.tri_tet);
+  if (depth.size() != 0) f.write_array("/mesh/depth", depth);
   std::vector<std::string> body_names;
   for (const Body& body : mesh.bodies) body_names.push_back(body.name);
   f.write_strings("/mesh/body_names", body_names);
+  f.write_strings("/mesh/body_materials", info.body_materials);
+  if (s.blocks.size() > 1) {
+    f.create_group("/mesh/blocks");
+    for (size_t b = 0; b < s.blocks.size(); ++b) {
+      const Body& body = mesh.bodies[b];
+      const std::string here = "/mesh/" + s.blocks[b].path;
+      f.create_group(here.substr(0, here.size() - 1));
+      const TetIndices local =
+          (mesh.tets.middleRows(body.first_tet, body.num_tets).array() - body.first_node).matrix();
+      f.write_array(here + "tets", local);
+      if (depth.size() != 0)
+        f.create_row_view(here + "depth", "/mesh/depth", hsize_t(body.first_node),
+                          hsize_t(body.num_nodes));
+    }
+  }
 
   f.create_group("/run");
   f.set_string_attribute("/run", "scene", info.scene_json);
@@ -85,36 +200,78 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
   f.set_string_attribute("/run", "message", "");
   f.write_strings("/run/constraint_names", info.constraint_names);
 
+  // The reference state: what the first step starts from.
+  const hsize_t nodes = hsize_t(mesh.num_nodes()), tets = hsize_t(mesh.num_tets()),
+                tris = hsize_t(mesh.num_tris());
+  f.create_group("/reference");
+  f.create_row_view("/reference/x", "/mesh/X", 0, nodes);
+  if (fields.displacement) f.create_zeros("/reference/displacement", {nodes, 3});
+  if (fields.velocity) f.write_array("/reference/v", info.initial_velocity);
+  if (fields.stress) {
+    f.create_zeros("/reference/stress", {tets, 6});
+    f.create_zeros("/reference/von_mises", {tets});
+  }
+  if (fields.strain) {
+    f.create_zeros("/reference/strain", {tets, 6});
+    f.write_array("/reference/volume_ratio", VectorX::Ones(mesh.num_tets()).eval());
+  }
+  if (fields.contact) {
+    for (const char* name : {"contact_pressure", "contact_gap", "contact_fraction"})
+      f.create_zeros(std::string("/reference/") + name, {tris});
+    f.create_zeros("/reference/contact_traction", {tris, 3});
+  }
+  s.write_block_views("/reference");
+
   f.create_group("/steps");
   f.flush();
-  state_->write_sidecar();
+  s.sidecar.emplace(std::filesystem::path(fs_path).replace_extension(".xmf").string(),
+                    SidecarLayout{fs_path.filename().string(), mesh.num_nodes(), mesh.num_tris(),
+                                  s.blocks, depth.size() != 0, fields},
+                    SidecarStep{"/reference", 0.0, {}});
 }
 
 ResultsFile::~ResultsFile() = default;
 
-void ResultsFile::append_step(const StepRecord& step, const Points& x, const Points* v) {
+void ResultsFile::append_step(const StepRecord& step, const Points& x, const Points* v,
+                              const ElementFields* elements) {
   State& s = *state_;
   const H5File& f = s.file;
+  const ResultFields& fields = s.info.fields;
   const std::string group = step_group(step.index);
-  const auto expect_rows = [&](const char* name, Eigen::Index rows, Index expected,
+  const auto expect_rows = [&](const char* name, Eigen::Index rows, Eigen::Index expected,
                                const char* of) {
     if (rows != expected)
       f.fail(group + ": " + name + " has " + std::to_string(rows) + " rows, expected " +
              std::to_string(expected) + " (" + of + ")");
   };
+  const Eigen::Index num_tets = s.num_tets;
   if (step.index < 0 || step.index > kMaxStepIndex)
     f.fail("step index " + std::to_string(step.index) + " is outside 0.." +
            std::to_string(kMaxStepIndex));
-  expect_rows("x", x.rows(), s.num_nodes, "#nodes");
-  if (v) expect_rows("v", v->rows(), s.num_nodes, "#nodes");
-  expect_rows("reactions", step.reactions.rows(), s.num_constraints, "#constraints");
+  expect_rows("x", x.rows(), s.num_nodes(), "#nodes");
+  if (bool(v) != fields.velocity)
+    f.fail(group +
+           (fields.velocity ? ": velocities missing" : ": velocities given to a run without"));
+  if (v) expect_rows("v", v->rows(), s.num_nodes(), "#nodes");
+  expect_rows("reactions", step.reactions.rows(), Eigen::Index(s.info.constraint_names.size()),
+              "#constraints");
+  if ((fields.stress || fields.strain) && !elements) f.fail(group + ": element fields missing");
+  if (fields.stress) {
+    expect_rows("stress", elements->stress.rows(), num_tets, "#tets");
+    expect_rows("von_mises", elements->von_mises.rows(), num_tets, "#tets");
+  }
+  if (fields.strain) {
+    expect_rows("strain", elements->strain.rows(), num_tets, "#tets");
+    expect_rows("volume_ratio", elements->volume_ratio.rows(), num_tets, "#tets");
+  }
+  if (fields.contact) expect_rows("surface", step.surface.area.rows(), s.tris.rows(), "#tris");
   std::vector<std::string> contact_names;
   for (const InterfaceForce& c : step.contact) contact_names.push_back(c.name);
-  if (!s.steps.empty() && contact_names != s.contact_names)
+  if (s.num_steps > 0 && contact_names != s.contact_names)
     f.fail(group + ": the contact interfaces differ from those of the first step");
   if (f.exists(group)) f.fail(group + " was already written");
 
-  if (s.steps.empty() && !contact_names.empty()) {
+  if (s.num_steps == 0 && !contact_names.empty()) {
     f.write_strings("/run/contact_names", contact_names);
     s.contact_names = contact_names;
   }
@@ -128,6 +285,7 @@ void ResultsFile::append_step(const StepRecord& step, const Points& x, const Poi
   if (v) f.set_attribute(group, "kinetic_energy", step.kinetic_energy);
   f.set_attribute(group, "seconds", step.seconds);
   f.write_array(group + "/x", x);
+  if (fields.displacement) f.write_array(group + "/displacement", (x - s.X).eval());
   if (v) f.write_array(group + "/v", *v);
   f.write_array(
       group + "/residuals",
@@ -147,10 +305,27 @@ void ResultsFile::append_step(const StepRecord& step, const Points& x, const Poi
     f.write_array(group + "/contact_force_magnitudes", magnitudes);
     f.write_array(group + "/contact_areas", areas);
   }
+  if (fields.stress) {
+    f.write_array(group + "/stress", elements->stress);
+    f.write_array(group + "/von_mises", elements->von_mises);
+  }
+  if (fields.strain) {
+    f.write_array(group + "/strain", elements->strain);
+    f.write_array(group + "/volume_ratio", elements->volume_ratio);
+  }
+  if (fields.contact) {
+    const SurfaceFields surface = surface_fields(s.tris, x, step.surface);
+    f.write_array(group + "/contact_pressure", surface.pressure);
+    f.write_array(group + "/contact_traction", surface.traction);
+    f.write_array(group + "/contact_gap", surface.gap);
+    f.write_array(group + "/contact_fraction", surface.fraction);
+  }
+  s.write_block_views(group);
   f.flush();
-
-  s.steps.push_back({step_name(step.index), group, step.load, v != nullptr});
-  s.write_sidecar();
+  ++s.num_steps;
+  // ParaView shows one state per distinct time: settling steps, all at load 1, follow at 2, 3, ...
+  const double time = step.settling ? 1.0 + double(++s.settling_steps) : step.load;
+  s.sidecar->append({group, time, step_values(step, fields.velocity, s.info.constraint_names)});
 }
 
 void ResultsFile::write_timing(const std::vector<std::pair<std::string, double>>& phases) {
@@ -194,13 +369,23 @@ ResultsSummary read_results_summary(const std::string& path) {
   return out;
 }
 
-Points read_step_positions(const std::string& path, Index step) {
+Eigen::MatrixXd read_step_dataset(const std::string& path, Index step, const std::string& name) {
   const H5File file = open_results(path);
   const std::string group = step_group(step);
   if (!file.exists(group)) file.fail("has no step " + std::to_string(step));
-  const std::vector<hsize_t> dims = file.dims(group + "/x");
-  if (dims.size() != 2 || dims[1] != 3) file.fail(group + "/x is not #nodes x 3");
-  return from_row_major<Points>(file.read_doubles(group + "/x"));
+  const std::string dataset = group + "/" + name;
+  if (!file.exists(dataset)) file.fail("has no dataset " + dataset);
+  const std::vector<hsize_t> dims = file.dims(dataset);
+  if (dims.empty() || dims.size() > 2) file.fail(dataset + " is not a 1D or 2D dataset");
+  const std::vector<double> values = file.read_doubles(dataset);
+  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+      values.data(), Eigen::Index(dims[0]), dims.size() == 2 ? Eigen::Index(dims[1]) : 1);
+}
+
+Points read_step_positions(const std::string& path, Index step) {
+  const Eigen::MatrixXd x = read_step_dataset(path, step, "x");
+  if (x.cols() != 3) throw InputError(located(path, 0, step_group(step) + "/x is not #nodes x 3"));
+  return x;
 }
 
 }  // namespace depthfem

@@ -1,63 +1,78 @@
 #pragma once
-/// HDF5 results file of a run (mesh, run metadata, one group per step, timing) with an XDMF sidecar
-/// for ParaView, and the reading back of what `depthfem info` and the tools need.
+/// HDF5 results file of a run (mesh, run metadata, the reference state, one group per step,
+/// timing) with an XDMF sidecar for ParaView, and the reading back of what `depthfem info`, the
+/// tests and the tools need. apps/README.md documents every dataset (name, shape, units).
 ///
 /// Layout (datasets row-major; strings variable-length UTF-8):
-///   /mesh/X (#nodes x 3 f64 [m]), /mesh/tets (#tets x 4 i32), /mesh/tris (#tris x 3 i32),
-///   /mesh/tet_body (#tets i32), /mesh/tri_body (#tris i32), /mesh/depth (#nodes f64 [m]),
-///   /mesh/body_names (#bodies strings);
-///   /run attributes scene, version, threads, analysis, status ("running", "completed", "failed"),
-///   message, and dataset /run/constraint_names (#constraints strings);
-///   /steps/NNNNNN (6-digit step index) attributes index, load, settling (i32 0/1),
-///   newton_iterations, linear_iterations, energy [J], seconds, with velocities kinetic_energy
-///   [J], with contact contact_area [m^2] (total); datasets x (#nodes x 3 f64 [m]), optional v
-///   (#nodes x 3 f64 [m/s]), residuals (one norm per Newton iteration), reactions (#constraints
-///   x 3 f64 [N]), with contact contact_forces (#interfaces x 3 f64 [N]),
-///   contact_force_magnitudes (#interfaces f64 [N]) and contact_areas (#interfaces f64 [m^2]),
-///   whose row names are /run/contact_names (written with the first step);
+///   /mesh: X, tets, tris, tet_body, tri_body, tri_tet, body_names, body_materials, depth (with
+///   material-depth contact only); with several bodies also blocks/<b>/tets (body-local node
+///   indices) and blocks/<b>/depth (a view);
+///   /run attributes scene, version, threads, analysis, status ("running", "completed",
+///   "failed"), message; datasets constraint_names, contact_names (with the first step);
+///   /reference: the state before the first step, laid out like a step (x, and the fields the
+///   run writes: zeros where they vanish, the initial velocity, volume ratio 1);
+///   /steps/NNNNNN (6-digit step index): attributes index, load, settling, newton_iterations,
+///   linear_iterations, energy, seconds, kinetic_energy (with velocities), contact_area (with
+///   contact); datasets x, displacement, v, residuals, reactions, contact_forces,
+///   contact_force_magnitudes, contact_areas, stress, von_mises, strain, volume_ratio,
+///   contact_pressure, contact_traction, contact_gap, contact_fraction (those the run writes);
+///   with several bodies, blocks/<b>/ row views of the node and tet datasets;
 ///   /timing attributes, one f64 [s] per phase, in the order given.
+/// Views are HDF5 virtual datasets of rows of this file: they let the sidecar give every body
+/// its own grid, which ParaView's XDMF readers cannot cut out of the scene-wide arrays. The
+/// sidecar's time of a step is its load (time-dependent runs: its time); ParaView shows one
+/// state per distinct time, so the settling steps of a static run, all at load 1, get times
+/// 2, 3, ...
 
 #include <memory>
-#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "core/mesh.hpp"
 #include "core/step_record.hpp"
+#include "core/xdmf_writer.hpp"
 
 namespace depthfem {
 
 /// The largest step index a results file holds (step groups are named with six digits).
 inline constexpr Index kMaxStepIndex = 999999;
 
-/// Metadata of a run written to /run at creation.
+/// Metadata of a run written to /run at creation, and what its steps will hold.
 struct RunInfo {
   std::string scene_json;                     ///< the scene file text
   std::string version;                        ///< depthfem version
   std::string analysis;                       ///< "static", "dynamic", ...
   int threads = 1;                            ///< worker threads of the run
   std::vector<std::string> constraint_names;  ///< one per boundary condition, the reaction rows
+  std::vector<std::string> body_materials;    ///< per body: material model name or "rigid"
+  ResultFields fields;                        ///< the per-step fields every step will hold
+  Points initial_velocity;                    ///< #nodes x 3 [m/s], when fields.velocity
 };
 
 /// Writes a results file. Every call leaves the file flushed and complete up to that call, so a
-/// run that dies keeps all completed steps (its status stays "running"). The constructor and every
-/// step rewrite the XDMF sidecar (the path with extension ".xmf"), which names the HDF5 file
-/// relatively. The file is opened without HDF5 file locks, so that other processes can read it
-/// during the run. All failures throw InputError naming the results file and the object at fault.
+/// run that dies keeps all completed steps (its status stays "running"). The sidecar (the path
+/// with extension ".xmf") names the HDF5 file relatively and grows by one entry per step, at a
+/// cost that does not depend on the number of steps before. The file is opened without HDF5
+/// file locks, so that other processes can read it during the run. All failures throw
+/// InputError naming the results file and the object at fault.
 class ResultsFile {
  public:
-  /// Creates (truncates) `path` and writes /mesh and /run; `depth` is #nodes [m] or empty (zeros).
+  /// Creates (truncates) `path` and writes /mesh, /run and /reference; `depth` is #nodes [m], or
+  /// empty when the run has no material-depth contact (no /mesh/depth then).
   ResultsFile(const std::string& path, const Mesh& mesh, const VectorX& depth, const RunInfo& info);
   /// Closes the file; the status is left as the last `finish` set it ("running" without one).
   ~ResultsFile();
   ResultsFile(const ResultsFile&) = delete;
   ResultsFile& operator=(const ResultsFile&) = delete;
 
-  /// Writes /steps/<index> with positions x and, for time-dependent runs, velocities v (or
-  /// null); throws if that step exists, the array sizes do not match the mesh, or the contact
-  /// interfaces differ from those of the first step.
-  void append_step(const StepRecord& step, const Points& x, const Points* v);
+  /// Writes /steps/<index> with positions x, velocities v (exactly when info.fields.velocity;
+  /// null otherwise) and the element fields the run writes (`elements`: null when it writes
+  /// none). Throws if that step exists, an array does not match the mesh, a field the run writes
+  /// is missing (step.surface for contact fields), or the contact interfaces differ from those
+  /// of the first step.
+  void append_step(const StepRecord& step, const Points& x, const Points* v,
+                   const ElementFields* elements = nullptr);
   /// (Re)writes /timing with one attribute per (phase name, seconds), in this order.
   void write_timing(const std::vector<std::pair<std::string, double>>& phases);
   /// Sets /run status to "completed" (success) or "failed", and /run message.
@@ -83,6 +98,10 @@ struct ResultsSummary {
 /// Reads the summary of a results file; throws InputError naming the file when it is missing, not
 /// HDF5, or not a depthfem results file.
 ResultsSummary read_results_summary(const std::string& path);
+
+/// Dataset `name` of group /steps/<step> ("x", "stress", ...) as #rows x #columns (one column
+/// for a 1D dataset); throws InputError naming file, step and dataset if absent.
+Eigen::MatrixXd read_step_dataset(const std::string& path, Index step, const std::string& name);
 
 /// Positions /steps/<step>/x (#nodes x 3 [m]); throws InputError naming file and step if absent.
 Points read_step_positions(const std::string& path, Index step);

@@ -14,11 +14,44 @@ namespace depthfem {
 struct InterfaceForce {
   std::string name;           ///< "femur/patella", "skin (self)", "obstacle floor"
   Vec3 force = Vec3::Zero();  ///< [N] on the first-named body (see the module's docs)
-  /// [N] the pair forces summed as magnitudes, each contact surface counted once: |force| where
-  /// the pressure points one way, and for self-contact (whose net force is internal and
-  /// cancels) the force pressed across the fold.
+  /// [N] the forces on the penetrating boundary triangles (netted per triangle) summed as
+  /// magnitudes, each contact surface counted once: |force| where the pressure points one way,
+  /// and for self-contact (whose net force is internal and cancels) the force pressed across
+  /// the fold. It is the integral of the contact pressure over the interface's triangles.
   double magnitude = 0;
   double area = 0;  ///< [m^2] of surface in contact, each contact surface counted once
+};
+
+/// Contact on each boundary triangle at a step, summed over the contact pairs whose penetrating
+/// surface is that triangle: the triangle inside a tet of another body (or of its own body, with
+/// self-contact), or inside an obstacle. The contact modules fill it in report(); it stays empty
+/// without contact.
+struct SurfaceContact {
+  /// #tris x 3 [N]: force on the triangle's body through the triangle's pairs. Body-to-body
+  /// contact is found from both sides, so each of two touching surfaces carries a share.
+  Eigen::Matrix<double, Eigen::Dynamic, 3> force;
+  /// #tris [N]: the magnitudes of the triangle's net force per body or obstacle it enters,
+  /// summed (|force| where it enters one)
+  VectorX magnitude;
+  VectorX area;            ///< #tris [m^2]: area of the triangle inside what it penetrates
+  VectorX depth_integral;  ///< #tris [m^3]: penetration depth integrated over that area
+
+  bool empty() const { return area.size() == 0; }
+  /// Sizes every array for `num_tris` triangles, all zero, unless they are sized already.
+  void resize(Index num_tris) {
+    if (area.size() == num_tris) return;
+    force = Eigen::Matrix<double, Eigen::Dynamic, 3>::Zero(num_tris, 3);
+    magnitude = area = depth_integral = VectorX::Zero(num_tris);
+  }
+};
+
+/// Per-tet stress and strain of a configuration (arrays left empty when not computed). Symmetric
+/// tensors are 6 components in the order xx, yy, zz, xy, yz, xz (VTK's and ParaView's).
+struct ElementFields {
+  Eigen::Matrix<double, Eigen::Dynamic, 6> stress;  ///< #tets x 6 Cauchy stress [Pa]
+  VectorX von_mises;                                ///< #tets von Mises stress [Pa]
+  Eigen::Matrix<double, Eigen::Dynamic, 6> strain;  ///< #tets x 6 logarithmic strain ln V [-]
+  VectorX volume_ratio;                             ///< #tets J = det F [-]
 };
 
 /// One completed step.
@@ -38,6 +71,8 @@ struct StepRecord {
   Eigen::Matrix<double, Eigen::Dynamic, 3> reactions;
   /// One row per contact interface of the scene, in a fixed order (empty without contact).
   std::vector<InterfaceForce> contact;
+  /// Contact per boundary triangle (empty without material-depth or obstacle contact).
+  SurfaceContact surface;
 
   /// Total contact area [m^2] over all interfaces.
   double contact_area() const {

@@ -1,7 +1,9 @@
 #pragma once
-/// The XDMF sidecar of a results file: the XML that lets ParaView read the HDF5 datasets as a
-/// temporal collection of tetrahedral grids.
+/// The XDMF sidecar of a results file: the XML through which ParaView reads the HDF5 datasets
+/// as a time series of multiblock data sets (one tetrahedral block per body, plus the boundary
+/// surface), written step by step at a cost per step that does not grow with the run.
 
+#include <ios>
 #include <string>
 #include <vector>
 
@@ -9,21 +11,68 @@
 
 namespace depthfem {
 
-/// A written step, as the sidecar lists it.
-struct SidecarStep {
-  std::string name;   ///< grid name ("000012")
-  std::string group;  ///< HDF5 group holding the step's datasets ("/steps/000012")
-  double load = 0;    ///< written as the grid's time
-  bool has_velocity = false;
+/// Which per-step fields a results file holds, fixed when it is created.
+struct ResultFields {
+  bool velocity = false;     ///< v (time-dependent analyses)
+  bool displacement = true;  ///< x - X
+  bool stress = false;       ///< Cauchy stress and von Mises stress per tet
+  bool strain = false;       ///< logarithmic strain and volume ratio per tet
+  bool contact = false;      ///< pressure, traction, gap and contact fraction per boundary triangle
 };
 
-/// XDMF 3 text of a temporal collection with one tetrahedral grid per step (Time = load), its
-/// positions, node depth, cell body and node velocity (when written) taken from `h5_name`.
-std::string xdmf_text(const std::string& h5_name, Index num_nodes, Index num_tets,
-                      const std::vector<SidecarStep>& steps);
+/// One tetrahedral block of the sidecar: a body (and, once meshes carry regions, a region of a
+/// body: then its tets must be one contiguous range, and its path names its own datasets).
+struct SidecarBlock {
+  std::string name;  ///< the block's name in ParaView
+  /// Where the block's datasets lie below /mesh and below each step group: "" for a block that
+  /// is the whole mesh (the datasets themselves), else "blocks/<k>/" (tets with block-local node
+  /// indices, and row views of the node and tet datasets).
+  std::string path;
+  Index num_nodes = 0, num_tets = 0;
+};
 
-/// Replaces `path` by `text` through a temporary file and a rename, so that it is never partial.
-/// Throws InputError naming `path` when it cannot be written.
-void write_file_atomically(const std::string& path, const std::string& text);
+/// What the sidecar lists from a results file.
+struct SidecarLayout {
+  std::string h5_name;  ///< the results file, as the sidecar names it (relative to the sidecar)
+  Index num_nodes = 0, num_tris = 0;
+  std::vector<SidecarBlock> blocks;
+  bool depth = false;  ///< /mesh/depth exists
+  ResultFields fields;
+};
+
+/// A named per-step value (1 or 3 components), shown by ParaView as field data.
+struct StepValue {
+  std::string name;
+  std::vector<double> values;
+};
+
+/// One state the sidecar lists.
+struct SidecarStep {
+  std::string group;  ///< HDF5 group of its datasets: "/reference" or "/steps/NNNNNN"
+  double time = 0;    ///< load factor (static) or time [s]
+  std::vector<StepValue> values;
+};
+
+/// Writes the sidecar of a results file: a temporal collection whose every state is a spatial
+/// collection of one tetrahedral grid per block and the grid "boundary" (the boundary triangles,
+/// which carry the contact fields and the step's values). The file is complete after every call;
+/// each step is written in place of the closing tags, which follow it again.
+class XdmfSidecar {
+ public:
+  /// Writes `path` (through a temporary file and a rename) with the `reference` state as its
+  /// first entry. Throws InputError naming `path` when it cannot be written.
+  XdmfSidecar(std::string path, SidecarLayout layout, const SidecarStep& reference);
+
+  /// Appends a state. Throws InputError naming the sidecar when it cannot be written.
+  void append(const SidecarStep& step);
+
+ private:
+  /// The XML of one state.
+  std::string state(const SidecarStep& step) const;
+
+  std::string path_;
+  SidecarLayout layout_;
+  std::streamoff end_ = 0;  ///< offset of the closing tags
+};
 
 }  // namespace depthfem

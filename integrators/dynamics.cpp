@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/decimal.hpp"
+
 namespace depthfem {
 
 Index time_step_count(const DynamicOptions& options) {
@@ -11,7 +13,7 @@ Index time_step_count(const DynamicOptions& options) {
 
 double step_end_time(const DynamicOptions& options, Index n) {
   if (n + 1 >= time_step_count(options)) return options.duration;
-  return std::min(options.duration, (n + 1) * options.time_step);
+  return std::min(options.duration, round_to_decimal((n + 1) * options.time_step));
 }
 
 }  // namespace depthfem

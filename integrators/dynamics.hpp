@@ -63,7 +63,8 @@ struct DynamicOptions {
 /// Number of steps of size time_step that cover the duration (the last one may be shorter).
 Index time_step_count(const DynamicOptions& options);
 
-/// End time of step n (0-based) [s]: (n + 1) time_step, and exactly the duration for the last.
+/// End time of step n (0-based) [s]: (n + 1) time_step as a decimal (round_to_decimal), and
+/// exactly the duration for the last.
 double step_end_time(const DynamicOptions& options, Index n);
 
 }  // namespace depthfem

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "core/decimal.hpp"
 #include "core/error.hpp"
 
 namespace depthfem {
@@ -14,7 +15,8 @@ void StaticSolver::run(Points& x) {
   Points previous = x;
   double increment = std::min(options_.initial_increment, options_.max_increment);
   // Load factors are base + k increment within a run of equal increments, so that ten steps of
-  // 0.1 end exactly at 1 instead of accumulating round-off.
+  // 0.1 end exactly at 1 instead of accumulating round-off, rounded to the decimal they stand
+  // for (0.44, not 0.44000000000000006).
   double base = 0;
   int count = 0, successes = 0;
   std::string last_failure;
@@ -55,7 +57,7 @@ void StaticSolver::run(Points& x) {
   };
 
   while (load < 1.0) {
-    double target = base + (count + 1) * increment;
+    double target = round_to_decimal(base + (count + 1) * increment);
     if (target > 1.0 || 1.0 - target <= 1e-9 * increment) target = 1.0;
     if (attempt(target, false)) {
       ++count;

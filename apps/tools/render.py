@@ -1,11 +1,15 @@
 #!/usr/bin/python3
 """Render the deformed boundary of one step of a depthfem results file to a PNG.
 
-    render.py RESULT.h5 OUT.png [--step N] [--view ELEV AZIM]
-              [--color displacement|depth|body] [--reference]
+    render.py RESULT.h5 OUT.png [--step N] [--view ELEV AZIM] [--color FIELD[:COMPONENT]]
+              [--reference] [--list]
 
-Faces are coloured by the mean over their nodes of |x - X| [m] or the material depth [m], or by
-the body they belong to. Errors print one line to stderr and exit with status 1.
+Faces are coloured by any field the file holds (--list prints them): node fields (displacement,
+velocity, depth) by the mean over the face's nodes, tet fields (stress, von_mises, strain,
+volume_ratio) by the tet the face belongs to, triangle fields (contact_pressure, contact_traction,
+contact_gap, contact_fraction) directly, and body by the body's name. Vectors are shown by their
+magnitude or a component (x, y, z); symmetric tensors by a component (xx, yy, zz, xy, yz, xz).
+The three axes share one scale. Errors print one line to stderr and exit with status 1.
 """
 
 import argparse
@@ -19,6 +23,7 @@ import matplotlib
 matplotlib.use("Agg")  # no display needed
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.ticker import FormatStrFormatter, MaxNLocator  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
 
@@ -56,12 +61,12 @@ def scene_name(f):
 
 
 def is_dynamic(f):
-    """Whether the run is dynamic, so that a step's "load" is its time [s]."""
-    return f["run"].attrs.get("analysis") == "dynamic"
+    """Whether the run is time-dependent, so that a step's "load" is its time [s]."""
+    return f["run"].attrs.get("analysis") in ("dynamic", "quasistatic")
 
 
 def load_label(f, load):
-    """'t = 0.5 s' for a dynamic run, 'load 0.5' otherwise."""
+    """'t = 0.5 s' for a time-dependent run, 'load 0.5' otherwise."""
     return f"t = {load:g} s" if is_dynamic(f) else f"load {load:g}"
 
 
@@ -74,42 +79,125 @@ def run_main(main, argv):
         sys.exit(1)
 
 
-def face_values(f, color, X, x, tris):
-    """Per-face values (#tris) of the field `color` and its colorbar label."""
-    if color == "displacement":
-        return np.linalg.norm(x - X, axis=1)[tris].mean(axis=1), "|x - X| [m]"
-    if color == "depth":
-        return f["mesh/depth"][:][tris].mean(axis=1), "depth [m]"
-    return f["mesh/tri_body"][:].astype(float), "body"
+# Units of the fields a results file can hold (apps/README.md), by the name --color takes.
+UNITS = {
+    "displacement": "m", "velocity": "m/s", "depth": "m", "stress": "Pa", "von_mises": "Pa",
+    "strain": "-", "volume_ratio": "-", "contact_pressure": "Pa", "contact_traction": "Pa",
+    "contact_gap": "m", "contact_fraction": "-", "body": None,
+}
+# Datasets of a step group under another name than --color's.
+DATASET = {"velocity": "v"}
+VECTOR_COMPONENTS = ("x", "y", "z")
+TENSOR_COMPONENTS = ("xx", "yy", "zz", "xy", "yz", "xz")
 
 
-def set_equal_axes(ax, points):
-    """Axis limits around `points` (#points x 3) with the same scale on all three axes."""
+def available_fields(f, step):
+    """The fields --color can show at step group `step`, in UNITS order."""
+    def present(name):
+        if name in ("body", "displacement"):  # displacement: x - X where not written
+            return True
+        if name == "depth":
+            return "depth" in f["mesh"]
+        return DATASET.get(name, name) in step
+    return [name for name in UNITS if present(name)]
+
+
+def field_data(f, name, step):
+    """The array of field `name` at step group `step`."""
+    if name == "depth":
+        return f["mesh/depth"][:]
+    if name == "displacement" and "displacement" not in step:
+        return step["x"][:] - f["mesh/X"][:]
+    return step[DATASET.get(name, name)][:]
+
+
+def field_values(f, name, component, step, x, tris):
+    """Per-face values (#tris) of field `name` (component or None) at a step, and a label."""
+    fields = available_fields(f, step)
+    if name not in fields:
+        raise ToolError(f"no field '{name}' in this step (fields: {', '.join(fields)})")
+    if name == "body":
+        if component:
+            raise ToolError("body has no components")
+        return f["mesh/tri_body"][:].astype(float), "body"
+    data = field_data(f, name, step)
+    if data.ndim == 2 and data.shape[1] == 3:
+        choices = VECTOR_COMPONENTS
+    elif data.ndim == 2 and data.shape[1] == 6:
+        choices = TENSOR_COMPONENTS
+        if component is None:
+            raise ToolError(f"{name} is a symmetric tensor: choose a component "
+                            f"({name}:{'|'.join(choices)})")
+    else:
+        choices = ()
+    if component is not None and component not in choices:
+        raise ToolError(f"{name} has no component '{component}'"
+                        + (f" (components: {', '.join(choices)})" if choices else ""))
+    if data.ndim == 2:
+        data = (np.linalg.norm(data, axis=1) if component is None
+                else data[:, choices.index(component)])
+    shown = f"|{name}|" if choices and component is None else (
+        f"{name} {component}" if component else name)
+    label = f"{shown} [{UNITS[name]}]"
+    rows = data.shape[0]
+    if rows == x.shape[0]:
+        return data[tris].mean(axis=1), label
+    if rows == tris.shape[0]:
+        return data, label
+    if "tri_tet" not in f["mesh"]:
+        raise ToolError(f"{name} is per tet, and the file has no /mesh/tri_tet to find the faces' tets")
+    return data[f["mesh/tri_tet"][:]], label
+
+
+def set_equal_axes(ax, points, ticks=6):
+    """Axis limits around `points` (#points x 3) with one scale on all three axes. The longest
+    axis gets at most `ticks` ticks, a shorter one proportionally fewer, labelled without
+    round-off; an axis under a quarter of the longest is too short on screen for tick labels,
+    and a note in the corner gives its range instead."""
     lo, hi = points.min(axis=0), points.max(axis=0)
-    extent = np.maximum(hi - lo, 1e-3 * max((hi - lo).max(), 1e-12))
+    longest = max((hi - lo).max(), 1e-12)
+    extent = np.maximum(hi - lo, 0.05 * longest)  # a flat body keeps a visible thickness
     center = (lo + hi) / 2
-    ax.set_xlim(center[0] - extent[0] / 2, center[0] + extent[0] / 2)
-    ax.set_ylim(center[1] - extent[1] / 2, center[1] + extent[1] / 2)
-    ax.set_zlim(center[2] - extent[2] / 2, center[2] + extent[2] / 2)
-    ax.set_box_aspect(extent)
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    ax.set_zlabel("z [m]", labelpad=10)
+    ranges = []
+    for k, (axis, name) in enumerate(zip((ax.xaxis, ax.yaxis, ax.zaxis), "xyz")):
+        getattr(ax, f"set_{name}lim")(center[k] - extent[k] / 2, center[k] + extent[k] / 2)
+        if extent[k] < 0.25 * longest:
+            axis.set_major_locator(MaxNLocator(1))
+            axis.set_ticklabels([])
+            axis.set_label_text(name)
+            ranges.append(f"{name} from {lo[k]:.3g} to {hi[k]:.3g} m")
+        else:
+            axis.set_major_locator(MaxNLocator(max(2, round(ticks * extent[k] / longest))))
+            axis.set_major_formatter(FormatStrFormatter("%g"))
+            axis.set_label_text(f"{name} [m]")
+        axis.labelpad = 8
+    if ranges:
+        ax.text2D(0.0, 0.0, ", ".join(ranges), transform=ax.transAxes, fontsize=8)
+    ax.set_box_aspect(extent, zoom=0.85)  # room for the z label
+    ax.tick_params(labelsize=8)
+
+
+def parse_color(text):
+    """'FIELD' or 'FIELD:COMPONENT' as (field, component or None)."""
+    name, _, component = text.partition(":")
+    return name, component or None
 
 
 def render(path, out, step=None, view=(25.0, -60.0), color="displacement", reference=False):
     """Draws step `step` (default: the last) of results file `path` and writes the PNG `out`."""
+    name_of_field, component = parse_color(color)
     with open_results(path) as f:
-        names = step_names(f, path)
-        name = names[-1] if step is None else f"{step:06d}"
-        if name not in names:
-            raise ToolError(f"{path}: no step {step} (steps {int(names[0])} to {int(names[-1])})")
+        group = chosen_step(f, path, step)
+        name = group.name.rsplit("/", 1)[1]
         tris = f["mesh/tris"][:]
         X = f["mesh/X"][:]
-        x = f[f"steps/{name}/x"][:]
-        values, label = face_values(f, color, X, x, tris)
+        x = group["x"][:]
+        try:
+            values, label = field_values(f, name_of_field, component, group, x, tris)
+        except ToolError as error:
+            raise ToolError(f"{path}: step {int(name)}: {error}") from None
         body_names = list(f["mesh/body_names"].asstr()[:])
-        where = f"step {int(name)}, {load_label(f, f['steps'][name].attrs['load'])}"
+        where = f"step {int(name)}, {load_label(f, group.attrs['load'])}"
         title = f"{scene_name(f)}: {where}" if scene_name(f) else where
 
     fig = plt.figure(figsize=(8, 7))
@@ -118,7 +206,7 @@ def render(path, out, step=None, view=(25.0, -60.0), color="displacement", refer
         ax.add_collection3d(
             Poly3DCollection(X[tris], facecolor="lightgrey", edgecolor="none", alpha=0.15)
         )
-    if color == "body":
+    if name_of_field == "body":
         cmap = plt.get_cmap("tab10", max(len(body_names), 1))
         norm = matplotlib.colors.Normalize(-0.5, max(len(body_names), 1) - 0.5)
     else:
@@ -131,34 +219,68 @@ def render(path, out, step=None, view=(25.0, -60.0), color="displacement", refer
     )
     set_equal_axes(ax, np.vstack([x, X]) if reference else x)
     ax.view_init(elev=view[0], azim=view[1])
-    bar = fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, shrink=0.6, pad=0.12, label=label)
-    if color == "body":
+    bar = fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, shrink=0.6,
+                       pad=0.02, location="bottom", label=label)
+    if name_of_field == "body":
         bar.set_ticks(range(len(body_names)), labels=body_names)
+    else:
+        bar.ax.xaxis.set_major_locator(MaxNLocator(6))
     ax.set_title(title)
-    save_figure(fig, out)
+    save_figure(fig, out, [axis.label for axis in (ax.xaxis, ax.yaxis, ax.zaxis)])
 
 
-def save_figure(fig, out):
-    """Writes the figure as a 150 dpi PNG and closes it; ToolError if it cannot be written."""
+def save_figure(fig, out, extra_artists=()):
+    """Writes the figure as a 150 dpi PNG, trimmed to its content and `extra_artists` (which the
+    trimming would miss, such as the axis labels of a 3D plot), and closes it; ToolError if it
+    cannot be written."""
     try:
-        fig.savefig(out, dpi=150)
+        fig.savefig(out, dpi=150, bbox_inches="tight", bbox_extra_artists=list(extra_artists))
     except OSError as error:
         raise ToolError(f"{out}: cannot write ({error.strerror})") from None
     plt.close(fig)
 
 
+def chosen_step(f, path, step):
+    """The group of step `step` (default: the last); ToolError if there is none."""
+    names = step_names(f, path)
+    name = names[-1] if step is None else f"{step:06d}"
+    if name not in names:
+        raise ToolError(f"{path}: no step {step} (steps {int(names[0])} to {int(names[-1])})")
+    return f["steps"][name]
+
+
+def list_fields(path, step=None):
+    """Prints the fields --color can show at a step (default: the last), with their shapes."""
+    with open_results(path) as f:
+        group = chosen_step(f, path, step)
+        for name in available_fields(f, group):
+            if name == "body":
+                print("body (names)")
+                continue
+            data = field_data(f, name, group)
+            parts = ({3: VECTOR_COMPONENTS, 6: TENSOR_COMPONENTS}.get(data.shape[1], ())
+                     if data.ndim == 2 else ())
+            print(f"{name} [{UNITS[name]}]" + (f" components {', '.join(parts)}" if parts else ""))
+
+
 def main(argv):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("result", help="results file (.h5)")
-    parser.add_argument("out", help="image to write (.png)")
+    parser.add_argument("out", nargs="?", help="image to write (.png)")
     parser.add_argument("--step", type=int, help="step index (default: the last step)")
     parser.add_argument("--view", type=float, nargs=2, default=(25.0, -60.0),
                         metavar=("ELEV", "AZIM"), help="camera elevation and azimuth [deg]")
-    parser.add_argument("--color", choices=("displacement", "depth", "body"),
-                        default="displacement", help="field that colours the faces")
+    parser.add_argument("--color", default="displacement", metavar="FIELD[:COMPONENT]",
+                        help="field that colours the faces (default: |displacement|)")
     parser.add_argument("--reference", action="store_true",
                         help="also draw the reference configuration, light and transparent")
+    parser.add_argument("--list", action="store_true", help="print the fields and exit")
     args = parser.parse_args(argv)
+    if args.list:
+        list_fields(args.result, args.step)
+        return
+    if args.out is None:
+        parser.error("the image to write (OUT.png) is missing")
     render(args.result, args.out, args.step, args.view, args.color, args.reference)
 
 

@@ -21,6 +21,18 @@ inline std::string temp_path(const std::string& name) {
       .string();
 }
 
+/// A results file at temp_path(name + ".h5"), removed with its sidecar when the test ends.
+struct TemporaryResults {
+  std::string path;
+  explicit TemporaryResults(const std::string& name) : path(temp_path(name + ".h5")) {}
+  ~TemporaryResults() {
+    std::filesystem::remove(path);
+    std::filesystem::remove(std::filesystem::path(path).replace_extension(".xmf"));
+  }
+  TemporaryResults(const TemporaryResults&) = delete;
+  TemporaryResults& operator=(const TemporaryResults&) = delete;
+};
+
 inline std::string scene_path(const std::string& name) {
   return std::string(DEPTHFEM_SOURCE_DIR) + "/apps/scenes/" + name + ".json";
 }

@@ -8,6 +8,7 @@
 
 #include "apps/scene_runner.hpp"
 #include "core/lumped_mass.hpp"
+#include "core/results_file.hpp"
 
 namespace depthfem {
 namespace {
@@ -15,6 +16,7 @@ namespace {
 using testing::interface;
 using testing::load;
 using testing::run;
+using testing::TemporaryResults;
 
 // Extreme z of the nodes of one body.
 double body_z(const Scene& s, const Points& x, Index body, bool top) {
@@ -23,13 +25,49 @@ double body_z(const Scene& s, const Points& x, Index body, bool top) {
   return top ? z.maxCoeff() : z.minCoeff();
 }
 
+// Reads the contact fields of every step back from results file `h5`: the contact pressure
+// integrated over the boundary (per triangle: pressure x its area at the step's positions) is
+// the sum of the step's contact force magnitudes, to round-off (1e-12). With one contact row,
+// the traction integrated over the first body's triangles, less that over the second body's
+// (an obstacle's row: over all triangles), is the row's force. Returns the integrated traction
+// of the last step.
+Vec3 expect_pressure_integrates_to_the_contact_rows(const Scene& s, const std::string& h5,
+                                                    Index steps) {
+  const TriIndices& tris = s.mesh.tris;
+  Vec3 traction_integral = Vec3::Zero();
+  for (Index k = 0; k < steps; ++k) {
+    SCOPED_TRACE("step " + std::to_string(k));
+    const Points x = read_step_positions(h5, k);
+    const Eigen::MatrixXd pressure = read_step_dataset(h5, k, "contact_pressure");
+    const Eigen::MatrixXd traction = read_step_dataset(h5, k, "contact_traction");
+    const Eigen::MatrixXd magnitudes = read_step_dataset(h5, k, "contact_force_magnitudes");
+    const Eigen::MatrixXd forces = read_step_dataset(h5, k, "contact_forces");
+    double force = 0;
+    traction_integral.setZero();
+    for (Index f = 0; f < tris.rows(); ++f) {
+      const Vec3 a = x.row(tris(f, 0)), b = x.row(tris(f, 1)), c = x.row(tris(f, 2));
+      const double area = 0.5 * (b - a).cross(c - a).norm();
+      force += pressure(f) * area;
+      const bool second = forces.rows() == 1 && s.mesh.tri_body(f) == 1 && s.obstacles.empty();
+      traction_integral += (second ? -area : area) * traction.row(f).transpose();
+    }
+    EXPECT_NEAR(force, magnitudes.sum(), 1e-12 * magnitudes.sum());
+    if (forces.rows() == 1)
+      EXPECT_LE((traction_integral - forces.row(0).transpose()).norm(), 1e-12 * magnitudes.sum());
+  }
+  return traction_integral;
+}
+
 // Start 30 % inside each other; the static run with quasi-viscosity must push them apart until
-// the faces meet: remaining overlap below 1 % of the thickness (0.2 m).
+// the faces meet: remaining overlap below 1 % of the thickness (0.2 m). The contact pressure read
+// back from the results file integrates to the reported force.
 TEST(ContactScenes, OverlappingBlocksSeparate) {
   const Scene s = load("blocks_overlap");
   ASSERT_NEAR(body_z(s, s.mesh.X, 0, true) - body_z(s, s.mesh.X, 1, false), 0.06, 1e-12);
-  const RunResult r = run(s);
+  const TemporaryResults out("blocks_overlap");
+  const RunResult r = run(s, out.path);
   ASSERT_TRUE(r.success) << r.message;
+  expect_pressure_integrates_to_the_contact_rows(s, out.path, Index(r.steps.size()));
   const double overlap = body_z(s, r.x, 0, true) - body_z(s, r.x, 1, false);
   EXPECT_LT(overlap, 0.002);
   EXPECT_GT(overlap, -0.002) << "the free block must come to rest on the other, not fly off";
@@ -37,13 +75,18 @@ TEST(ContactScenes, OverlappingBlocksSeparate) {
 
 // Released in mid-air, the ball falls 0.2 m in a static run and rests on the floor: the floor
 // carries its weight (that of the meshed ball: lumped masses x g) and the penetration is small.
+// Read back from the results file, the contact traction integrates to the weight too.
 TEST(ContactScenes, BallFallsOntoTheFloorInAStaticRun) {
   const Scene s = load("ball_drop");
-  const RunResult r = run(s);
+  const TemporaryResults out("ball_drop");
+  const RunResult r = run(s, out.path);
   ASSERT_TRUE(r.success) << r.message;
   const double weight = lumped_mass(s.mesh.X, s.mesh.tets, s.tet_density).sum() * 9.81;
   const InterfaceForce& floor = interface(r.steps.back(), "obstacle floor");
   EXPECT_NEAR(floor.force.z(), weight, 0.01 * weight);
+  const Vec3 traction =
+      expect_pressure_integrates_to_the_contact_rows(s, out.path, Index(r.steps.size()));
+  EXPECT_NEAR(traction.z(), weight, 0.01 * weight);
   EXPECT_LT(floor.force.head<2>().norm(), 1e-3 * weight) << "a level floor pushes straight up";
   const double lowest = r.x.col(2).minCoeff();
   EXPECT_LT(lowest, 0.0);
@@ -59,7 +102,7 @@ TEST(ContactScenes, SlidingBlockConvergesAtEveryStep) {
   ASSERT_TRUE(r.success) << r.message;
   ASSERT_EQ(r.steps.size(), 50u);
   for (size_t k = 0; k < r.steps.size(); ++k) {
-    EXPECT_NEAR(r.steps[k].load, 0.02 * (k + 1), 1e-12);
+    EXPECT_EQ(r.steps[k].load, (k + 1) / 50.0) << "load factors are the decimals k x 0.02";
     EXPECT_LE(r.steps[k].newton_iterations, 10) << "step " << k;
   }
   // The slider carries a downward load: the drive pushes it into the base.
@@ -173,10 +216,14 @@ TEST(ContactScenes, HertzForceConvergesAsThePenaltyGrows) {
 // reference y, interpolated along x, must lie below it up to 5 % of the thickness (measured:
 // 0.2 mm, 0.2 %). Self-contact must carry force: the obstacles' total force balances the
 // boundary reactions (no other loads), so what the step reports beyond it is the pair force.
+// Self-contact, the floor and the plate together: the contact pressure read back from the
+// results file integrates to the sum of the rows' magnitudes.
 TEST(ContactScenes, FoldedSlabRestsOnItselfBySelfContact) {
   const Scene s = load("fold_slab");
-  const RunResult r = run(s);
+  const TemporaryResults out("fold_slab");
+  const RunResult r = run(s, out.path);
   ASSERT_TRUE(r.success) << r.message;
+  expect_pressure_integrates_to_the_contact_rows(s, out.path, Index(r.steps.size()));
   const double thickness = 0.1;
   const Points& X = s.mesh.X;
   double deepest = -1;

@@ -68,6 +68,29 @@ TEST_F(SceneFileTest, UnknownKeyIsNamedWithItsPath) {
   EXPECT_NE(u.find("scene.json: gravty: unknown key"), std::string::npos) << u;
 }
 
+// The output section: defaults (displacement and contact fields on, stress and strain off), its
+// keys read, an unknown one named.
+TEST_F(SceneFileTest, OutputSectionChoosesTheFields) {
+  const Scene defaults = load_scene(write(kValid));
+  EXPECT_TRUE(defaults.output.displacement);
+  EXPECT_FALSE(defaults.output.stress);
+  EXPECT_FALSE(defaults.output.strain);
+  EXPECT_TRUE(defaults.output.contact);
+  const Scene chosen = load_scene(write(replaced(
+      kValid, "\"name\": \"t\"",
+      R"("name": "t", "output": {"displacement": false, "stress": true, "strain": true, "contact": false})")));
+  EXPECT_FALSE(chosen.output.displacement);
+  EXPECT_TRUE(chosen.output.stress);
+  EXPECT_TRUE(chosen.output.strain);
+  EXPECT_FALSE(chosen.output.contact);
+  EXPECT_NE(error(replaced(kValid, "\"name\": \"t\"", R"("name": "t", "output": {"strss": true})"))
+                .find("scene.json: output.strss: unknown key"),
+            std::string::npos);
+  EXPECT_NE(error(replaced(kValid, "\"name\": \"t\"", R"("name": "t", "output": {"stress": 1})"))
+                .find("output.stress: expected true or false"),
+            std::string::npos);
+}
+
 TEST_F(SceneFileTest, WrongTypesAreNamed) {
   EXPECT_NE(error(replaced(kValid, "\"C1\": 1", "\"C1\": \"soft\""))
                 .find("bodies[0].material.C1: expected a number"),

@@ -1,5 +1,7 @@
-// Results files: exact round trip of mesh, run metadata, steps and timing through the HDF5 C API,
-// completed steps surviving a killed writer, the XDMF sidecar, and errors naming the file.
+// Results files: exact round trip of mesh, run metadata, the reference state, steps, fields and
+// timing through the HDF5 C API; per-body views; completed steps surviving a killed writer; the
+// XDMF sidecar's structure (every dataset it names exists with the dimensions it states) and its
+// step-by-step growth; errors naming the file.
 #include <gtest/gtest.h>
 #include <hdf5.h>
 #include <sys/wait.h>
@@ -9,6 +11,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -41,6 +44,32 @@ class RawFile {
   RawFile& operator=(const RawFile&) = delete;
 
   bool has(const char* name) const { return H5Lexists(id_, name, H5P_DEFAULT) > 0; }
+  bool has(const std::string& name) const { return has(name.c_str()); }
+
+  // Whether dataset `name` is a virtual dataset (a view holding no data of its own), and the
+  // bytes of data it stores.
+  bool is_view(const std::string& name) const {
+    const hid_t set = H5Dopen2(id_, name.c_str(), H5P_DEFAULT), plist = H5Dget_create_plist(set);
+    const bool view = H5Pget_layout(plist) == H5D_VIRTUAL;
+    H5Pclose(plist);
+    H5Dclose(set);
+    return view;
+  }
+  hsize_t storage(const std::string& name) const {
+    const hid_t set = H5Dopen2(id_, name.c_str(), H5P_DEFAULT);
+    const hsize_t bytes = H5Dget_storage_size(set);
+    H5Dclose(set);
+    return bytes;
+  }
+  std::vector<double> doubles(const std::string& name) const {
+    std::vector<hsize_t> dims;
+    return values<double>(name, H5T_NATIVE_DOUBLE, dims);
+  }
+  std::vector<hsize_t> dims(const std::string& name) const {
+    std::vector<hsize_t> dims;
+    values<double>(name, H5T_NATIVE_DOUBLE, dims);
+    return dims;
+  }
   bool has_attribute(const std::string& object, const char* name) const {
     return H5Aexists_by_name(id_, object.c_str(), name, H5P_DEFAULT) > 0;
   }
@@ -104,8 +133,23 @@ struct Fixture {
   Mesh mesh = single_body_mesh(
       box_mesh({Vec3(0.1, -0.2, 0.3), Vec3(0.4, 0.3, 0.7), Eigen::Vector3i(1, 1, 2)}), "block");
   VectorX depth = (0.7 - mesh.X.col(2).array()).matrix();
-  RunInfo info{R"({"name": "squeeze", "steps": 3})", "0.1.0", "static", 2, {"bottom", "top"}};
+  RunInfo info{R"({"name": "squeeze", "steps": 3})",
+               "0.1.0",
+               "static",
+               2,
+               {"bottom", "top"},
+               {"mooney_rivlin"},
+               {},
+               {}};
 };
+
+// Two bodies: "left" (12 tets) and "right" (a 2 x 1 x 1-cell box, 12 tets, 18 nodes).
+Mesh two_bodies() {
+  Mesh mesh;
+  mesh.add_body("left", box_mesh({Vec3(0, 0, 0), Vec3(1, 1, 1), Eigen::Vector3i(1, 1, 2)}));
+  mesh.add_body("right", box_mesh({Vec3(2, 0, 0), Vec3(4, 1, 1), Eigen::Vector3i(2, 1, 1)}));
+  return mesh;
+}
 
 // Step k: positions X scaled about the origin by 1 + k / 7 (not exactly representable).
 Points positions(const Mesh& mesh, int k) {
@@ -130,6 +174,40 @@ StepRecord step_record(int k) {
   return s;
 }
 
+// Element fields whose every value is distinct: value = k + (row * columns + column) / 1000.
+ElementFields element_values(Index tets, int k) {
+  ElementFields e;
+  e.stress.resize(tets, 6);
+  e.strain.resize(tets, 6);
+  e.von_mises.resize(tets);
+  e.volume_ratio.resize(tets);
+  for (Index t = 0; t < tets; ++t) {
+    for (int c = 0; c < 6; ++c) {
+      e.stress(t, c) = k + (6 * t + c) / 1000.0;
+      e.strain(t, c) = -k - (6 * t + c) / 1000.0;
+    }
+    e.von_mises(t) = k + t / 7.0;
+    e.volume_ratio(t) = 1 + t / 9.0;
+  }
+  return e;
+}
+
+// Row-major values of a matrix, as the file stores them.
+template <class Derived>
+std::vector<double> row_major(const Eigen::MatrixBase<Derived>& m) {
+  std::vector<double> out;
+  for (Eigen::Index r = 0; r < m.rows(); ++r)
+    for (Eigen::Index c = 0; c < m.cols(); ++c) out.push_back(double(m(r, c)));
+  return out;
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
 class ResultsFileTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -149,13 +227,10 @@ TEST_F(ResultsFileTest, RoundTripOfMeshRunStepsAndTiming) {
   const fs::path path = dir_ / "run.h5";
   std::vector<Points> x;
   for (int k = 1; k <= 3; ++k) x.push_back(positions(f_.mesh, k));
-  const Points v = Points::Constant(f_.mesh.num_nodes(), 3, 0.125);
   {
     ResultsFile file(path, f_.mesh, f_.depth, f_.info);
     for (int k = 1; k <= 3; ++k) {
-      StepRecord s = step_record(k);
-      s.kinetic_energy = 0.75 * k;
-      file.append_step(s, x[k - 1], k == 2 ? &v : nullptr);
+      file.append_step(step_record(k), x[k - 1], nullptr);
       if (k == 1) {  // readable while the writer is open
         const ResultsSummary during = read_results_summary(path);
         EXPECT_EQ(during.status, "running");
@@ -171,8 +246,7 @@ TEST_F(ResultsFileTest, RoundTripOfMeshRunStepsAndTiming) {
   std::vector<hsize_t> dims;
   const std::vector<double> X = raw.values<double>("/mesh/X", H5T_NATIVE_DOUBLE, dims);
   ASSERT_EQ(dims, std::vector<hsize_t>({12, 3}));
-  for (Index n = 0; n < 12; ++n)  // row-major in the file, column-major in memory
-    for (int c = 0; c < 3; ++c) EXPECT_EQ(X[3 * n + c], f_.mesh.X(n, c));
+  EXPECT_EQ(X, row_major(f_.mesh.X));  // row-major in the file, column-major in memory
   const std::vector<int> tets = raw.values<int>("/mesh/tets", H5T_NATIVE_INT, dims);
   ASSERT_EQ(dims, std::vector<hsize_t>({12, 4}));
   for (Index t = 0; t < 12; ++t)
@@ -184,9 +258,12 @@ TEST_F(ResultsFileTest, RoundTripOfMeshRunStepsAndTiming) {
   EXPECT_EQ(raw.values<int>("/mesh/tet_body", H5T_NATIVE_INT, dims), std::vector<int>(12, 0));
   EXPECT_EQ(raw.values<int>("/mesh/tri_body", H5T_NATIVE_INT, dims),
             std::vector<int>(f_.mesh.num_tris(), 0));
-  EXPECT_EQ(raw.values<double>("/mesh/depth", H5T_NATIVE_DOUBLE, dims),
-            std::vector<double>(f_.depth.begin(), f_.depth.end()));
+  EXPECT_EQ(raw.values<int>("/mesh/tri_tet", H5T_NATIVE_INT, dims),
+            std::vector<int>(f_.mesh.tri_tet.begin(), f_.mesh.tri_tet.end()));
+  EXPECT_EQ(raw.doubles("/mesh/depth"), std::vector<double>(f_.depth.begin(), f_.depth.end()));
   EXPECT_EQ(raw.strings("/mesh/body_names"), std::vector<std::string>({"block"}));
+  EXPECT_EQ(raw.strings("/mesh/body_materials"), std::vector<std::string>({"mooney_rivlin"}));
+  EXPECT_FALSE(raw.has("/mesh/blocks")) << "one body: the sidecar uses the scene's datasets";
 
   EXPECT_EQ(raw.string_attribute("/run", "scene"), f_.info.scene_json);
   EXPECT_EQ(raw.string_attribute("/run", "version"), "0.1.0");
@@ -195,6 +272,13 @@ TEST_F(ResultsFileTest, RoundTripOfMeshRunStepsAndTiming) {
   EXPECT_EQ(raw.string_attribute("/run", "message"), "");
   EXPECT_EQ(raw.attribute<int>("/run", "threads", H5T_NATIVE_INT), 2);
   EXPECT_EQ(raw.strings("/run/constraint_names"), f_.info.constraint_names);
+
+  // The reference state: positions X (a view of /mesh/X), no displacement (zeros, no storage).
+  EXPECT_TRUE(raw.is_view("/reference/x"));
+  EXPECT_EQ(raw.doubles("/reference/x"), X);
+  EXPECT_EQ(raw.doubles("/reference/displacement"), std::vector<double>(36, 0.0));
+  EXPECT_EQ(raw.storage("/reference/displacement"), 0u);
+  EXPECT_FALSE(raw.has("/reference/v"));
 
   for (int k = 1; k <= 3; ++k) {
     SCOPED_TRACE("step " + std::to_string(k));
@@ -206,28 +290,24 @@ TEST_F(ResultsFileTest, RoundTripOfMeshRunStepsAndTiming) {
     EXPECT_EQ(raw.attribute<int>(g, "linear_iterations", H5T_NATIVE_INT), 10 * k + 1);
     EXPECT_EQ(raw.attribute<double>(g, "energy", H5T_NATIVE_DOUBLE), 0.5 * k);
     EXPECT_EQ(raw.attribute<double>(g, "seconds", H5T_NATIVE_DOUBLE), 0.01 * k);
-    const std::vector<double> xk = raw.values<double>(g + "/x", H5T_NATIVE_DOUBLE, dims);
-    ASSERT_EQ(dims, std::vector<hsize_t>({12, 3}));
-    for (Index n = 0; n < 12; ++n)
-      for (int c = 0; c < 3; ++c) EXPECT_EQ(xk[3 * n + c], x[k - 1](n, c));
-    EXPECT_EQ(raw.values<double>(g + "/residuals", H5T_NATIVE_DOUBLE, dims), expected.residuals);
-    EXPECT_EQ(raw.values<double>(g + "/reactions", H5T_NATIVE_DOUBLE, dims),
+    EXPECT_EQ(raw.doubles(g + "/x"), row_major(x[k - 1]));
+    EXPECT_EQ(raw.dims(g + "/x"), std::vector<hsize_t>({12, 3}));
+    EXPECT_EQ(raw.doubles(g + "/displacement"), row_major(x[k - 1] - f_.mesh.X));
+    EXPECT_EQ(raw.doubles(g + "/residuals"), expected.residuals);
+    EXPECT_EQ(raw.doubles(g + "/reactions"),
               std::vector<double>({1.0 / k, 2, 3, -1.0 / k, -2, -3}));
-    EXPECT_EQ(dims, std::vector<hsize_t>({2, 3}));
-    EXPECT_EQ(raw.has((g + "/v").c_str()), k == 2);
-    EXPECT_EQ(raw.has_attribute(g, "kinetic_energy"), k == 2);  // only with velocities
+    EXPECT_EQ(raw.dims(g + "/reactions"), std::vector<hsize_t>({2, 3}));
+    EXPECT_FALSE(raw.has(g + "/v"));
+    EXPECT_FALSE(raw.has_attribute(g, "kinetic_energy"));  // only with velocities
+    for (const char* field : {"stress", "strain", "contact_pressure", "blocks"})
+      EXPECT_FALSE(raw.has(g + "/" + field)) << field << " was not asked for";
     EXPECT_EQ(raw.attribute<double>(g, "contact_area", H5T_NATIVE_DOUBLE), expected.contact_area());
-    EXPECT_EQ(raw.values<double>(g + "/contact_forces", H5T_NATIVE_DOUBLE, dims),
+    EXPECT_EQ(raw.doubles(g + "/contact_forces"),
               std::vector<double>({0.5 * k, -1, 2, 0, 0, double(k)}));
-    EXPECT_EQ(dims, std::vector<hsize_t>({2, 3}));
-    EXPECT_EQ(raw.values<double>(g + "/contact_force_magnitudes", H5T_NATIVE_DOUBLE, dims),
-              std::vector<double>({3.0 * k, 4.0}));
-    EXPECT_EQ(raw.values<double>(g + "/contact_areas", H5T_NATIVE_DOUBLE, dims),
-              std::vector<double>({0.01 * k, 0.02}));
+    EXPECT_EQ(raw.dims(g + "/contact_forces"), std::vector<hsize_t>({2, 3}));
+    EXPECT_EQ(raw.doubles(g + "/contact_force_magnitudes"), std::vector<double>({3.0 * k, 4.0}));
+    EXPECT_EQ(raw.doubles(g + "/contact_areas"), std::vector<double>({0.01 * k, 0.02}));
   }
-  EXPECT_EQ(raw.values<double>("/steps/000002/v", H5T_NATIVE_DOUBLE, dims),
-            std::vector<double>(36, 0.125));
-  EXPECT_EQ(raw.attribute<double>("/steps/000002", "kinetic_energy", H5T_NATIVE_DOUBLE), 1.5);
   EXPECT_EQ(raw.strings("/run/contact_names"),
             std::vector<std::string>({"block/ball", "obstacle floor"}));
 
@@ -250,17 +330,84 @@ TEST_F(ResultsFileTest, RoundTripOfMeshRunStepsAndTiming) {
       {"solve", 2.5}, {"assembly", 1.5}, {"contact", 0.25}};
   EXPECT_EQ(s.timing, timing);
   for (int k = 1; k <= 3; ++k) EXPECT_EQ(read_step_positions(path, k), x[k - 1]);
+  EXPECT_EQ(read_step_dataset(path, 2, "reactions"), step_record(2).reactions);
+  EXPECT_EQ(read_step_dataset(path, 2, "residuals"),
+            Eigen::Map<const VectorX>(step_record(2).residuals.data(), 4));
 }
 
-TEST_F(ResultsFileTest, FailedRunKeepsMessageAndEmptyDepthIsZero) {
+// Every field a run can ask for: velocities (the initial one in the reference state), element
+// fields as given, and the contact fields derived from the per-triangle sums, per unit of the
+// triangle's current area.
+TEST_F(ResultsFileTest, FieldsOfAStepAndOfTheReferenceState) {
+  const fs::path path = dir_ / "fields.h5";
+  RunInfo info = f_.info;
+  info.analysis = "dynamic";
+  info.fields = {
+      .velocity = true, .displacement = true, .stress = true, .strain = true, .contact = true};
+  info.initial_velocity = Points::Constant(12, 3, 0.25);
+  const Index tris = f_.mesh.num_tris();
+  const Points x = positions(f_.mesh, 1), v = Points::Constant(12, 3, -0.5);
+  StepRecord step = step_record(1);
+  step.kinetic_energy = 0.75;
+  step.surface.resize(tris);
+  step.surface.force.row(2) = Vec3(1, -2, 3).transpose();
+  step.surface.magnitude(2) = 4.0;
+  step.surface.area(2) = 0.002;
+  step.surface.depth_integral(2) = 0.002 * 1e-3;
+  const ElementFields elements = element_values(12, 1);
+  {
+    ResultsFile file(path, f_.mesh, f_.depth, info);
+    file.append_step(step, x, &v, &elements);
+  }
+  const RawFile raw(path);
+  EXPECT_EQ(raw.doubles("/reference/v"), std::vector<double>(36, 0.25));
+  for (const char* zero : {"stress", "von_mises", "strain", "contact_pressure", "contact_traction",
+                           "contact_gap", "contact_fraction"}) {
+    const std::string name = std::string("/reference/") + zero;
+    const std::vector<double> values = raw.doubles(name);
+    EXPECT_FALSE(values.empty()) << name;
+    EXPECT_EQ(values, std::vector<double>(values.size(), 0.0)) << name;
+    EXPECT_EQ(raw.storage(name), 0u) << name << " must take no space";
+  }
+  EXPECT_EQ(raw.doubles("/reference/volume_ratio"), std::vector<double>(12, 1.0));
+
+  const std::string g = "/steps/000001";
+  EXPECT_EQ(raw.doubles(g + "/v"), std::vector<double>(36, -0.5));
+  EXPECT_EQ(raw.attribute<double>(g, "kinetic_energy", H5T_NATIVE_DOUBLE), 0.75);
+  EXPECT_EQ(raw.doubles(g + "/stress"), row_major(elements.stress));
+  EXPECT_EQ(raw.dims(g + "/stress"), std::vector<hsize_t>({12, 6}));
+  EXPECT_EQ(raw.doubles(g + "/strain"), row_major(elements.strain));
+  EXPECT_EQ(raw.doubles(g + "/von_mises"), row_major(elements.von_mises));
+  EXPECT_EQ(raw.doubles(g + "/volume_ratio"), row_major(elements.volume_ratio));
+  // Triangle 2 at x: its current area A.
+  const Vec3 a = x.row(f_.mesh.tris(2, 0)), b = x.row(f_.mesh.tris(2, 1)),
+             c = x.row(f_.mesh.tris(2, 2));
+  const double A = 0.5 * (b - a).cross(c - a).norm();
+  std::vector<double> pressure(tris, 0.0), gap(tris, 0.0), fraction(tris, 0.0),
+      traction(3 * tris, 0.0);
+  pressure[2] = 4.0 / A;
+  gap[2] = 1e-3;
+  fraction[2] = 0.002 / A;
+  for (int k = 0; k < 3; ++k) traction[6 + k] = step.surface.force(2, k) / A;
+  const auto near = [](const std::vector<double>& got, const std::vector<double>& expected) {
+    ASSERT_EQ(got.size(), expected.size());
+    for (size_t i = 0; i < got.size(); ++i)
+      EXPECT_NEAR(got[i], expected[i], 1e-14 * std::abs(expected[i])) << "entry " << i;
+  };
+  near(raw.doubles(g + "/contact_pressure"), pressure);
+  near(raw.doubles(g + "/contact_traction"), traction);
+  near(raw.doubles(g + "/contact_gap"), gap);
+  near(raw.doubles(g + "/contact_fraction"), fraction);
+}
+
+TEST_F(ResultsFileTest, NoDepthWithoutMaterialDepthContact) {
   const fs::path path = dir_ / "failed.h5";
   {
     ResultsFile file(path, f_.mesh, VectorX(), f_.info);
     file.finish(false, "step 1: Newton did not converge");
   }
-  const RawFile raw(path);
-  std::vector<hsize_t> dims;
-  EXPECT_EQ(raw.values<double>("/mesh/depth", H5T_NATIVE_DOUBLE, dims), std::vector<double>(12, 0));
+  EXPECT_FALSE(RawFile(path).has("/mesh/depth"));
+  EXPECT_EQ(read_text(dir_ / "failed.xmf").find("Name=\"depth\""), std::string::npos);
   const ResultsSummary s = read_results_summary(path);
   EXPECT_EQ(s.status, "failed");
   EXPECT_EQ(s.message, "step 1: Newton did not converge");
@@ -295,47 +442,170 @@ TEST_F(ResultsFileTest, KilledWriterKeepsCompletedSteps) {
   EXPECT_EQ(read_step_positions(path, 1), x1);
   EXPECT_EQ(read_step_positions(path, 2), x2);
   EXPECT_THROW(read_step_positions(path, 3), InputError);
+  // The sidecar is complete: the reference state and both steps, closed.
+  const std::string xmf = read_text(dir_ / "killed.xmf");
+  EXPECT_NE(xmf.find("killed.h5:/steps/000002/x<"), std::string::npos);
+  EXPECT_EQ(xmf.substr(xmf.size() - 8), "</Xdmf>\n");
 }
 
-TEST_F(ResultsFileTest, XdmfSidecarListsEveryStepRelatively) {
-  const fs::path path = dir_ / "sidecar.h5";
-  const Points x1 = positions(f_.mesh, 1), x2 = positions(f_.mesh, 2);
-  ResultsFile file(path, f_.mesh, f_.depth, f_.info);
-  StepRecord s1 = step_record(1), s2 = step_record(2);
-  s1.load = 0.25;
-  s2.load = 1.5;
-  file.append_step(s1, x1, nullptr);
-  file.append_step(s2, x2, nullptr);
+// Two bodies: each gets body-local tets and row views of the node and tet datasets.
+TEST_F(ResultsFileTest, EveryBodyViewsItsOwnRows) {
+  const fs::path path = dir_ / "bodies.h5";
+  const Mesh mesh = two_bodies();
+  RunInfo info{"{}", "0.1.0", "static", 1, {}, {"neo_hookean", "rigid"}, {}, {}};
+  info.fields.stress = info.fields.strain = true;
+  const Points x = positions(mesh, 1);
+  const ElementFields elements = element_values(mesh.num_tets(), 1);
+  StepRecord step = step_record(1);
+  step.reactions.resize(0, 3);
+  {
+    ResultsFile file(path, mesh, VectorX(), info);
+    file.append_step(step, x, nullptr, &elements);
+  }
+  const RawFile raw(path);
+  std::vector<hsize_t> dims;
+  for (Index b = 0; b < 2; ++b) {
+    const Body& body = mesh.bodies[b];
+    SCOPED_TRACE(body.name);
+    const std::string mesh_block = "/mesh/blocks/" + std::to_string(b);
+    const std::vector<int> local = raw.values<int>(mesh_block + "/tets", H5T_NATIVE_INT, dims);
+    EXPECT_EQ(dims, std::vector<hsize_t>({hsize_t(body.num_tets), 4}));
+    for (Index t = 0; t < body.num_tets; ++t)
+      for (int c = 0; c < 4; ++c)
+        EXPECT_EQ(local[4 * t + c], mesh.tets(body.first_tet + t, c) - body.first_node);
+    for (const std::string group : {"/reference", "/steps/000001"}) {
+      const std::string here = group + "/blocks/" + std::to_string(b) + "/";
+      const Points& positions = group == "/reference" ? mesh.X : x;
+      EXPECT_TRUE(raw.is_view(here + "x"));
+      EXPECT_EQ(raw.doubles(here + "x"),
+                row_major(positions.middleRows(body.first_node, body.num_nodes)));
+      EXPECT_EQ(raw.doubles(here + "displacement"),
+                row_major((positions - mesh.X).middleRows(body.first_node, body.num_nodes)));
+      if (group == "/reference") continue;
+      EXPECT_EQ(raw.doubles(here + "stress"),
+                row_major(elements.stress.middleRows(body.first_tet, body.num_tets)));
+      EXPECT_EQ(raw.doubles(here + "volume_ratio"),
+                row_major(elements.volume_ratio.segment(body.first_tet, body.num_tets)));
+    }
+  }
+}
 
-  std::ifstream in(dir_ / "sidecar.xmf");
-  ASSERT_TRUE(in) << "no sidecar";
-  std::stringstream text;
-  text << in.rdbuf();
-  const std::string xmf = text.str();
+// The sidecar: one temporal collection of states (the reference state at time 0, then every step
+// at its exact load), each a spatial collection of one tetrahedral grid per body, named after the
+// body and its material, and the boundary grid with the step's values as field data. Every HDF5
+// dataset it names exists in the results file with the dimensions it states.
+TEST_F(ResultsFileTest, XdmfSidecarStructure) {
+  const fs::path path = dir_ / "sidecar.h5";
+  const Mesh mesh = two_bodies();
+  RunInfo info{"{}", "0.1.0", "dynamic", 1, {"clamp"}, {"neo_hookean", "rigid"}, {}, {}};
+  info.fields = {
+      .velocity = true, .displacement = true, .stress = true, .strain = true, .contact = true};
+  info.initial_velocity = Points::Zero(mesh.num_nodes(), 3);
+  const VectorX depth = VectorX::LinSpaced(mesh.num_nodes(), 0, 1);
+  std::vector<std::string> texts;
+  {
+    ResultsFile file(path, mesh, depth, info);
+    texts.push_back(read_text(dir_ / "sidecar.xmf"));
+    for (int k = 1; k <= 2; ++k) {
+      StepRecord s = step_record(k);
+      s.load = k == 1 ? 0.44 : 0.5;
+      s.reactions = Eigen::Matrix<double, 1, 3>(1.5, -2, 0.1 * k);
+      s.surface.resize(mesh.num_tris());
+      const Points x = positions(mesh, k);
+      const ElementFields e = element_values(mesh.num_tets(), k);
+      file.append_step(s, x, &x, &e);
+      texts.push_back(read_text(dir_ / "sidecar.xmf"));
+    }
+  }
+  const std::string& xmf = texts.back();
   const auto count = [&](const std::string& what) {
     size_t n = 0;
     for (size_t at = xmf.find(what); at != std::string::npos; at = xmf.find(what, at + 1)) ++n;
     return n;
   };
-  EXPECT_EQ(count("<Grid"), 3u);  // the temporal collection and one grid per step
   EXPECT_EQ(count("CollectionType=\"Temporal\""), 1u);
-  EXPECT_EQ(count("<Time Value=\"0.25\"/>"), 1u);
-  EXPECT_EQ(count("<Time Value=\"1.5\"/>"), 1u);
-  EXPECT_EQ(count(">sidecar.h5:/steps/000001/x<"), 1u);
-  EXPECT_EQ(count(">sidecar.h5:/steps/000002/x<"), 1u);
-  EXPECT_EQ(count(">sidecar.h5:/mesh/tets<"), 2u);
+  EXPECT_EQ(count("CollectionType=\"Spatial\""), 3u);
+  EXPECT_EQ(count("<Grid Name=\"reference\" GridType=\"Collection\""), 1u);
+  EXPECT_EQ(count("<Time Value=\"0\"/>"), 1u);
+  EXPECT_EQ(count("<Time Value=\"0.44\"/>"), 1u);
+  EXPECT_EQ(count("<Time Value=\"0.5\"/>"), 1u);
+  EXPECT_EQ(count("<Grid Name=\"left (neo_hookean)\" GridType=\"Uniform\">"), 3u);
+  EXPECT_EQ(count("<Grid Name=\"right (rigid)\" GridType=\"Uniform\">"), 3u);
+  EXPECT_EQ(count("<Grid Name=\"boundary\" GridType=\"Uniform\">"), 3u);
+  // Per step: step, load, settling, newton_iterations, linear_iterations, residual, energy,
+  // kinetic_energy, the reaction, the total contact area and three values per interface; none
+  // for the reference.
+  EXPECT_EQ(count("Center=\"Grid\""), 2u * 16);
+  EXPECT_EQ(count("<Attribute Name=\"energy\" AttributeType=\"Scalar\" Center=\"Grid\"><DataItem "
+                  "Dimensions=\"1\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">1<"),
+            1u);
+  EXPECT_EQ(count("<Attribute Name=\"reaction clamp\" AttributeType=\"Vector\" Center=\"Grid\">"
+                  "<DataItem Dimensions=\"1 3\" NumberType=\"Float\" Precision=\"8\" "
+                  "Format=\"XML\">1.5 -2 0.2<"),
+            1u);
+  EXPECT_EQ(count("contact_force block/ball"), 2u);
+  for (const char* name :
+       {"displacement", "velocity", "depth", "stress", "von_mises", "strain", "volume_ratio"})
+    EXPECT_EQ(
+        count("<Attribute Name=\"" + std::string(name) + "\""),
+        3u * 2 + (name == std::string("displacement") || name == std::string("depth") ? 3 : 0))
+        << name;
+  EXPECT_EQ(count("<Attribute Name=\"contact_pressure\""), 3u);
   EXPECT_EQ(count(dir_.string()), 0u) << "the HDF5 file must be referenced relatively";
   EXPECT_EQ(xmf.substr(xmf.size() - 8), "</Xdmf>\n");
-  EXPECT_FALSE(fs::exists(dir_ / "sidecar.xmf.tmp"));
+
+  // Every HDF5 dataset it names, with its dimensions.
+  const RawFile raw(path);
+  const std::regex item(
+      R"re(<DataItem Dimensions="([0-9 ]+)" NumberType="(Float|Int)" Precision="(4|8)" Format="HDF">sidecar\.h5:([^<]+)</DataItem>)re");
+  size_t items = 0;
+  for (std::sregex_iterator m(xmf.begin(), xmf.end(), item), end; m != end; ++m, ++items) {
+    const std::string dataset = (*m)[4];
+    SCOPED_TRACE(dataset);
+    ASSERT_TRUE(raw.has(dataset));
+    std::string dims;
+    for (const hsize_t d : raw.dims(dataset)) dims += (dims.empty() ? "" : " ") + std::to_string(d);
+    EXPECT_EQ(dims, (*m)[1].str());
+  }
+  EXPECT_EQ(items, 3u * (2 * 9 + 9)) << "per state: 2 blocks x 9 items, boundary 9";
+
+  // Each step was appended: what was written before (less the closing tags) stays as it was.
+  for (size_t k = 1; k < texts.size(); ++k) {
+    const std::string before =
+        texts[k - 1].substr(0, texts[k - 1].rfind("    </Grid>\n  </Domain>"));
+    EXPECT_EQ(texts[k].compare(0, before.size(), before), 0) << "step " << k << " rewrote the file";
+  }
 }
 
-TEST_F(ResultsFileTest, RejectsStepsThatDoNotMatchTheMesh) {
+// ParaView shows one state per distinct time: the settling steps of a static run, all at load 1,
+// follow the loading at times 2, 3, ... (their load stays 1 in the file and the field data).
+TEST_F(ResultsFileTest, SettlingStepsGetTimesOfTheirOwn) {
+  const fs::path path = dir_ / "settle.h5";
+  {
+    ResultsFile file(path, f_.mesh, f_.depth, f_.info);
+    for (int k = 1; k <= 4; ++k) {
+      StepRecord s = step_record(k);
+      s.load = k == 1 ? 0.5 : 1.0;
+      s.settling = k > 2;
+      file.append_step(s, positions(f_.mesh, k), nullptr);
+    }
+  }
+  const std::string xmf = read_text(dir_ / "settle.xmf");
+  std::vector<std::string> times;
+  const std::regex time(R"re(<Time Value="([^"]+)"/>)re");
+  for (std::sregex_iterator m(xmf.begin(), xmf.end(), time), end; m != end; ++m)
+    times.push_back((*m)[1]);
+  EXPECT_EQ(times, std::vector<std::string>({"0", "0.5", "1", "2", "3"}));
+  EXPECT_EQ(RawFile(path).attribute<double>("/steps/000004", "load", H5T_NATIVE_DOUBLE), 1.0);
+}
+
+TEST_F(ResultsFileTest, RejectsStepsThatDoNotMatchTheRun) {
   const fs::path path = dir_ / "mismatch.h5";
   ResultsFile file(path, f_.mesh, f_.depth, f_.info);
   const Points x = positions(f_.mesh, 1), short_x = x.topRows(5);
   StepRecord s = step_record(1);
   EXPECT_THROW(file.append_step(s, short_x, nullptr), InputError);
-  EXPECT_THROW(file.append_step(s, x, &short_x), InputError);
+  EXPECT_THROW(file.append_step(s, x, &x), InputError) << "velocities in a static run";
   s.reactions.resize(1, 3);
   EXPECT_THROW(file.append_step(s, x, nullptr), InputError);
   s = step_record(1);
@@ -351,6 +621,22 @@ TEST_F(ResultsFileTest, RejectsStepsThatDoNotMatchTheMesh) {
     EXPECT_NE(std::string(e.what()).find("/steps/000001"), std::string::npos) << e.what();
   }
   EXPECT_THROW(ResultsFile(dir_ / "no_such_dir" / "x.h5", f_.mesh, f_.depth, f_.info), InputError);
+
+  RunInfo fields = f_.info;
+  fields.fields = {
+      .velocity = true, .displacement = true, .stress = true, .strain = false, .contact = true};
+  fields.initial_velocity = Points::Zero(12, 3);
+  ResultsFile more(dir_ / "more.h5", f_.mesh, f_.depth, fields);
+  StepRecord t = step_record(1);
+  t.surface.resize(f_.mesh.num_tris());
+  const ElementFields e = element_values(12, 1);
+  EXPECT_THROW(more.append_step(t, x, nullptr, &e), InputError) << "velocities missing";
+  EXPECT_THROW(more.append_step(t, x, &x, nullptr), InputError) << "element fields missing";
+  StepRecord no_surface = step_record(1);
+  EXPECT_THROW(more.append_step(no_surface, x, &x, &e), InputError) << "surface missing";
+  more.append_step(t, x, &x, &e);
+  fields.initial_velocity = Points::Zero(11, 3);
+  EXPECT_THROW(ResultsFile(dir_ / "v.h5", f_.mesh, f_.depth, fields), InputError);
 }
 
 // Runs `read`, which must throw InputError with a message that names `path` and contains `what`.
@@ -374,6 +660,14 @@ TEST_F(ResultsFileTest, ReadingRejectsMissingAndForeignFiles) {
   expect_input_error([&] { read_results_summary(text); }, text, "HDF5");
   expect_input_error([&] { read_results_summary(other); }, other, "not a depthfem results file");
   expect_input_error([&] { read_step_positions(text, 0); }, text, "HDF5");
+  const fs::path run = dir_ / "run.h5";
+  {
+    ResultsFile file(run, f_.mesh, f_.depth, f_.info);
+    file.append_step(step_record(1), positions(f_.mesh, 1), nullptr);
+  }
+  expect_input_error([&] { read_step_dataset(run, 1, "stress"); }, run,
+                     "no dataset /steps/000001/stress");
+  expect_input_error([&] { read_step_dataset(run, 4, "x"); }, run, "no step 4");
 }
 
 }  // namespace

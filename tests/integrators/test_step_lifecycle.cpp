@@ -111,7 +111,8 @@ TEST(StepLifecycle, StaticIncrementsOfATenthEndExactlyAtOne) {
   Points x = rig.X;
   StaticSolver(rig.lifecycle, nullptr, options).run(x);
   ASSERT_EQ(rig.steps.size(), 10u) << "no extra step at a load of 1 - round-off";
-  for (size_t k = 0; k < 10; ++k) EXPECT_EQ(rig.steps[k].load, (k + 1) * 0.1);
+  // The decimals k / 10 (3 x 0.1 would be 0.30000000000000004).
+  for (size_t k = 0; k < 10; ++k) EXPECT_EQ(rig.steps[k].load, (k + 1) / 10.0);
   EXPECT_EQ(rig.steps.back().load, 1.0);
   rig.expect_lifecycle(1.0);
 }
@@ -130,6 +131,7 @@ void expect_times(const std::vector<StepRecord>& steps) {
   ASSERT_EQ(steps.size(), 4u);
   EXPECT_EQ(steps[0].load, 0.3);
   EXPECT_EQ(steps[1].load, 0.6);
+  EXPECT_EQ(steps[2].load, 0.9);  // the decimal, not 3 x 0.3 = 0.8999999999999999
   EXPECT_EQ(steps[3].load, 1.0);
 }
 

@@ -1,7 +1,7 @@
 #pragma once
-// Hand-derived uniaxial responses of every material model, shared by the material tests and the
-// uniaxial_block scene test. Independent of the library's chain rule: each P11, P22 is written
-// out from the model's psi by hand.
+// Hand-derived uniaxial and simple-shear responses of every material model, shared by the
+// material tests and the scene and results-file tests. Independent of the library's chain rule:
+// each stress is written out from the model's psi by hand.
 
 #include <cmath>
 
@@ -62,6 +62,49 @@ double lateral_stretch(const M& m, double l) {
     (closed_uniaxial(m, l, mid).P22 > 0 ? hi : lo) = mid;
   }
   return 0.5 * (lo + hi);
+}
+
+// Simple shear F = I + g e_x e_y^T (J = 1, I1 = I2 = 3 + g^2; fiber along y: I4 = 1 + g^2).
+// Isotropic part: P = 2 psi1 F + 2 psi2 (I1 F - F C) + psiJ cof F gives
+//   P01 = 2 g (psi1 + psi2), P10 = -g (2 psi2 + psiJ), P00 = 2 psi1 + 2 psi2 (2) + psiJ,
+//   P11 = 2 psi1 + 2 psi2 (2) + psiJ, P22 = 2 psi1 + 2 psi2 (2 + g^2) + psiJ, with
+// psi_x evaluated at J = 1 by hand per material below. The fiber adds 2 psi4 (F f) f^T =
+// 2 psi4 [g, 1, 0]^T e_y^T: P01 += 2 psi4 g, P11 += 2 psi4.
+struct ShearCoefficients {
+  double psi1, psi2, psiJ, psi4 = 0;
+};
+inline ShearCoefficients shear_coefficients(const NeoHookean& m, double) {
+  return {m.mu / 2, 0, -m.mu};
+}
+inline ShearCoefficients shear_coefficients(const MooneyRivlin& m, double) {
+  return {m.C1, m.C2, 2 * m.a - 2 * (m.C1 + 2 * m.C2 + m.a)};
+}
+inline ShearCoefficients shear_coefficients(const Veronda& m, double g) {
+  return {2 * m.alpha * std::exp(g * g), m.alpha * m.beta,
+          2 * m.a - 2 * (m.a + 2 * m.alpha + 2 * m.alpha * m.beta)};
+}
+inline ShearCoefficients shear_coefficients(const NearlyIncompressibleMooneyRivlin& m, double g) {
+  const double I = 3 + g * g;
+  return {m.C1, m.C2, -2.0 / 3 * m.C1 * I - 4.0 / 3 * m.C2 * I};
+}
+template <class Base>
+ShearCoefficients shear_coefficients(const FiberReinforced<Base>& m, double g) {
+  ShearCoefficients c = shear_coefficients(m.base, g);
+  c.psi4 = m.alpha * m.beta * (std::exp(m.beta * g * g) - 1);
+  return c;
+}
+
+// P of simple shear F = I + g e_x e_y^T (fiber along y) from the coefficients above.
+template <class M>
+Eigen::Matrix3d simple_shear_piola(const M& m, double g) {
+  const ShearCoefficients c = shear_coefficients(m, g);
+  Eigen::Matrix3d P = Eigen::Matrix3d::Zero();
+  P(0, 1) = 2 * g * (c.psi1 + c.psi2) + 2 * c.psi4 * g;
+  P(1, 0) = -g * (2 * c.psi2 + c.psiJ);
+  P(0, 0) = 2 * c.psi1 + 4 * c.psi2 + c.psiJ;
+  P(1, 1) = 2 * c.psi1 + 4 * c.psi2 + c.psiJ + 2 * c.psi4;
+  P(2, 2) = 2 * c.psi1 + 2 * c.psi2 * (2 + g * g) + c.psiJ;
+  return P;
 }
 
 }  // namespace depthfem::closed_form

@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Runs every shipped scene with every field written (stress and strain turned on) and opens the
+# results in ParaView, headless, checking steps, blocks and fields against the HDF5 files
+# (apps/tools/paraview_check.py). hertz_sphere runs on the coarse corner mesh of its penalty
+# test (its shipped mesh takes minutes). Writes bench/results/paraview_check.txt.
+# Needs Debian's paraview, python3-paraview and xvfb; nothing else in the project does.
+# Usage: bench/paraview_check.sh [BUILD_DIR]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build=${1:-build}
+for tool in pvbatch xvfb-run; do
+  command -v "$tool" > /dev/null || { echo "paraview_check: $tool not found (apt-get install paraview python3-paraview xvfb)" >&2; exit 1; }
+done
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+for scene in apps/scenes/*.json; do
+  name=$(basename "$scene" .json)
+  extra=()
+  if [ "$name" = hertz_sphere ]; then
+    extra=(--set 'bodies.0.mesh={"generator": "corner", "size": 16, "core": 0.12, "core_cells": 8, "ratio": 1.2}'
+           --set boundary.2.nodes.plane.offset=16 --set solver.initial_increment=0.25)
+  fi
+  "$build/apps/depthfem" run "$scene" --out "$out/$name.h5" \
+    --set 'output={"stress": true, "strain": true}' "${extra[@]}" > "$out/$name.log" 2>&1 \
+    || { echo "paraview_check: $name failed: $(tail -n 1 "$out/$name.log")" >&2; exit 1; }
+done
+xvfb-run -a pvbatch apps/tools/paraview_check.py "$out"/*.xmf | tee bench/results/paraview_check.txt

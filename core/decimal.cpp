@@ -1,0 +1,14 @@
+#include "core/decimal.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+
+namespace depthfem {
+
+double round_to_decimal(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.11e", value);  // 12 significant digits
+  return std::strtod(text, nullptr);
+}
+
+}  // namespace depthfem

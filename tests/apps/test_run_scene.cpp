@@ -1,0 +1,132 @@
+// What run_scene writes to the results file, read back: per-tet stress and strain of the
+// homogeneous uniaxial_block scene against the closed forms of tests/materials/closed_forms.hpp
+// (uniaxial stretch, and simple shear prescribed on every node), and the fields the output
+// section and the scene's physics choose.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "apps/scene_runner.hpp"
+#include "core/error.hpp"
+#include "core/results_file.hpp"
+#include "materials/closed_forms.hpp"
+
+namespace depthfem {
+namespace {
+
+using namespace closed_form;
+using testing::load;
+using testing::run;
+using testing::TemporaryResults;
+
+const std::string kAllFields = R"(output={"stress": true, "strain": true})";
+
+// Every tet of step `step` of `h5` has the Cauchy stress `sigma` and the logarithmic strain
+// `log_v` of the homogeneous state F, to `tolerance` x the largest stress component (strain and
+// volume ratio: x 1); von Mises is sqrt(3/2 s : s) of sigma's deviator s.
+void expect_homogeneous(const std::string& h5, Index step, const Mat3& F, const Mat3& sigma,
+                        const Mat3& log_v, double tolerance) {
+  const Eigen::MatrixXd stress = read_step_dataset(h5, step, "stress");
+  const Eigen::MatrixXd von_mises = read_step_dataset(h5, step, "von_mises");
+  const Eigen::MatrixXd strain = read_step_dataset(h5, step, "strain");
+  const Eigen::MatrixXd volume_ratio = read_step_dataset(h5, step, "volume_ratio");
+  ASSERT_EQ(stress.cols(), 6);
+  const Mat3 s = sigma - sigma.trace() / 3 * Mat3::Identity();
+  const double scale = sigma.cwiseAbs().maxCoeff(), mises = std::sqrt(1.5 * s.squaredNorm());
+  const int row[6] = {0, 1, 2, 0, 1, 0}, col[6] = {0, 1, 2, 1, 2, 2};  // xx yy zz xy yz xz
+  for (Index t = 0; t < stress.rows(); ++t) {
+    for (int c = 0; c < 6; ++c) {
+      EXPECT_NEAR(stress(t, c), sigma(row[c], col[c]), tolerance * scale)
+          << "tet " << t << " " << c;
+      EXPECT_NEAR(strain(t, c), log_v(row[c], col[c]), tolerance) << "tet " << t << " " << c;
+    }
+    EXPECT_NEAR(von_mises(t), mises, tolerance * scale) << "tet " << t;
+    EXPECT_NEAR(volume_ratio(t), F.determinant(), tolerance) << "tet " << t;
+  }
+}
+
+// uniaxial_block stretched to l = 1.5: F = diag(l, t, t) with the closed-form lateral stretch,
+// sigma = diag(P11 / t^2, 0, 0). The solve leaves the nodes within 1e-8 m of the closed form (the
+// scene test), so F, the strain and the stress relative to their scale are within about 1e-7.
+TEST(RunScene, UniaxialStressAndStrainReadBackMatchTheClosedForm) {
+  const auto check = [](const std::string& material_json, const auto& model) {
+    SCOPED_TRACE(material_json);
+    const TemporaryResults out("run_scene");
+    const RunResult r =
+        run(load("uniaxial_block", {"bodies.0.material=" + material_json, kAllFields}), out.path);
+    ASSERT_TRUE(r.success) << r.message;
+    const double l = 1.5, t = lateral_stretch(model, l);
+    const Mat3 sigma = Vec3(closed_uniaxial(model, l, t).P11 / (t * t), 0, 0).asDiagonal();
+    const Mat3 log_v = Vec3(std::log(l), std::log(t), std::log(t)).asDiagonal();
+    expect_homogeneous(out.path, Index(r.steps.size()) - 1, Vec3(l, t, t).asDiagonal(), sigma,
+                       log_v, 1e-6);
+  };
+  check(R"({"model": "mooney_rivlin", "C1": 4000, "C2": 1000, "a": 20000})",
+        MooneyRivlin{4e3, 1e3, 2e4});
+  check(R"({"model": "fiber_veronda", "alpha": 1500, "beta": 0.8, "a": 20000,
+            "fiber_alpha": 2000, "fiber_beta": 3, "fiber_direction": [1, 0, 0]})",
+        FiberReinforced<Veronda>{{1.5e3, 0.8, 2e4}, 2e3, 3});
+}
+
+// The unit cube with every node moved by simple shear u = g y e_x (one condition per layer of
+// nodes y = 0, 0.5, 1): F = I + g e_x e_y^T in every tet exactly, sigma = P F^T (J = 1) with the
+// hand-derived P, and ln V = asinh(g/2) / sqrt(1 + g^2/4) [[g/2, 1, 0], [1, -g/2, 0], [0, 0, 0]]
+// (derived in tests/integrators/test_element_fields.cpp). Only round-off separates them: 1e-10.
+TEST(RunScene, SimpleShearStressReadBackMatchesTheClosedForm) {
+  const double g = 0.4, c = std::asinh(g / 2) / std::sqrt(1 + g * g / 4);
+  Mat3 log_v = Mat3::Zero();
+  log_v.topLeftCorner<2, 2>() << c * g / 2, c, c, -c * g / 2;
+  std::string layers;
+  for (const double y : {0.0, 0.5, 1.0})
+    layers += std::string(layers.empty() ? "" : ", ") +
+              R"({"type": "displaced", "displacement": [)" + std::to_string(g * y) +
+              R"(, 0, 0], "nodes": {"box": {"lo": [-1, )" + std::to_string(y - 0.1) +
+              R"(, -1], "hi": [2, )" + std::to_string(y + 0.1) + R"(, 2]}}})";
+  const auto check = [&](const std::string& material_json, const auto& model) {
+    SCOPED_TRACE(material_json);
+    const TemporaryResults out("run_scene");
+    const RunResult r = run(load("uniaxial_block", {"bodies.0.material=" + material_json,
+                                                    "boundary=[" + layers + "]", kAllFields}),
+                            out.path);
+    ASSERT_TRUE(r.success) << r.message;
+    Mat3 F = Mat3::Identity();
+    F(0, 1) = g;
+    expect_homogeneous(out.path, Index(r.steps.size()) - 1, F,
+                       simple_shear_piola(model, g) * F.transpose(), log_v, 1e-10);
+  };
+  check(R"({"model": "neo_hookean", "mu": 10000, "lambda": 40000})", NeoHookean{1e4, 4e4});
+  check(R"({"model": "mooney_rivlin", "C1": 4000, "C2": 1000, "a": 20000})",
+        MooneyRivlin{4e3, 1e3, 2e4});
+}
+
+// The output section chooses what each step holds; contact fields need contact, velocities a
+// time-dependent analysis, and the material depth is written only with material-depth contact.
+TEST(RunScene, OutputSectionAndPhysicsChooseTheFields) {
+  const auto datasets = [](const std::vector<std::string>& overrides, const std::string& scene) {
+    const TemporaryResults out("run_scene");
+    const RunResult r = run(load(scene, overrides), out.path);
+    EXPECT_TRUE(r.success) << r.message;
+    std::string names;
+    for (const char* name : {"displacement", "v", "stress", "strain", "contact_pressure"}) {
+      try {
+        read_step_dataset(out.path, 0, name);
+        names += std::string(names.empty() ? "" : " ") + name;
+      } catch (const InputError&) {
+      }
+    }
+    return names;
+  };
+  EXPECT_EQ(datasets({}, "uniaxial_block"), "displacement");
+  EXPECT_EQ(datasets({R"(output={"displacement": false, "stress": true})"}, "uniaxial_block"),
+            "stress");
+  EXPECT_EQ(datasets({"dynamic.duration=0.01", R"(output={"strain": true})"}, "falling_bars"),
+            "displacement v strain");
+  const std::string wall =
+      R"(obstacles=[{"name": "wall", "type": "plane", "point": [3, 0, 0], "normal": [-1, 0, 0], "penalty": 1e6}])";
+  EXPECT_EQ(datasets({wall}, "uniaxial_block"), "displacement contact_pressure");
+  EXPECT_EQ(datasets({wall, R"(output={"contact": false})"}, "uniaxial_block"), "displacement");
+}
+
+}  // namespace
+}  // namespace depthfem
