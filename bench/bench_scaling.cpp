@@ -2,13 +2,16 @@
 // appended as a CSV row (run each case in its own process, so that the peak memory is its own;
 // bench/scaling.sh runs the whole study).
 //
-//   build/bench/bench_scaling --scene cantilever|sliding --size S --solver auto|direct|amg
-//       [--threads N] [--out bench/results/scaling.csv] [--set PATH=VALUE ...]
+//   build/bench/bench_scaling --scene cantilever|sliding|hertz --size S --solver auto|direct|amg
+//       [--threads N] [--ordering best|amd|metis] [--indefinite shift|ldlt]
+//       [--out bench/results/scaling.csv] [--set PATH=VALUE ...]
 //
 // cantilever: cantilever_gravity with S x S/10 x S/10 cells (6 S^3 / 100 tets), bending under
 //   its own weight in one increment.
 // sliding: sliding_blocks with every cell count scaled by S (4488 S^3 tets), the slider pressed
 //   2 cm and moved 2 cm in four increments: material-depth contact between two bodies.
+// hertz: the first increment of hertz_sphere alone (the sphere pushed 1 mm into the undeformed
+//   block: an indefinite Hessian at first), S core cells per edge (12: the shipped mesh).
 // Per Newton iteration: wall time of the run without mesh generation and material depth, and of
 // the linear solve alone. Peak memory is the process's maximum resident set.
 #include <sys/resource.h>
@@ -44,13 +47,20 @@ std::pair<std::string, std::vector<std::string>> scene_case(const std::string& n
              "bodies.1.mesh.cells=" + cells(6 * S, 6 * S, 3 * S),
              "boundary.1.displacement=[0.02,0,-0.02]", "solver.initial_increment=0.25",
              "solver.max_increment=0.25"}};
-  throw std::invalid_argument("unknown scene '" + name + "' (expected cantilever or sliding)");
+  if (name == "hertz")
+    return {
+        "hertz_sphere",
+        {"bodies.0.mesh.core_cells=" + std::to_string(std::lround(S)),
+         "obstacles.0.motion=[0,0,0.001]", "solver.initial_increment=1", "solver.max_increment=1"}};
+  throw std::invalid_argument("unknown scene '" + name +
+                              "' (expected cantilever, sliding or hertz)");
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string scene_name, solver = "auto", out = "bench/results/scaling.csv";
+  DirectSolverOptions direct;
   double size = 0;
   int threads = 0;
   std::vector<std::string> extra;
@@ -65,13 +75,22 @@ int main(int argc, char** argv) {
       solver = argv[++i];
     } else if (a == "--threads" && has_value) {
       threads = std::stoi(argv[++i]);
+    } else if (a == "--ordering" && has_value) {
+      const std::string v = argv[++i];
+      direct.ordering = v == "amd"     ? DirectOrdering::kAmd
+                        : v == "metis" ? DirectOrdering::kMetis
+                                       : DirectOrdering::kBest;
+    } else if (a == "--indefinite" && has_value) {
+      direct.indefinite =
+          std::string(argv[++i]) == "ldlt" ? IndefiniteFallback::kLdlt : IndefiniteFallback::kShift;
     } else if (a == "--out" && has_value) {
       out = argv[++i];
     } else if (a == "--set" && has_value) {
       extra.push_back(argv[++i]);
     } else {
-      std::cerr << "usage: bench_scaling --scene cantilever|sliding --size S --solver "
-                   "auto|direct|amg [--threads N] [--out FILE.csv] [--set PATH=VALUE ...]\n";
+      std::cerr << "usage: bench_scaling --scene cantilever|sliding|hertz --size S --solver "
+                   "auto|direct|amg [--threads N] [--ordering best|amd|metis] [--indefinite "
+                   "shift|ldlt] [--out FILE.csv] [--set PATH=VALUE ...]\n";
       return 2;
     }
   }
@@ -81,8 +100,9 @@ int main(int argc, char** argv) {
     overrides.insert(overrides.end(), extra.begin(), extra.end());
     std::vector<Override> o;
     for (const std::string& s : overrides) o.push_back(parse_override(s));
-    const Scene scene =
+    Scene scene =
         load_scene(std::string(DEPTHFEM_SOURCE_DIR) + "/apps/scenes/" + file + ".json", o);
+    scene.static_options.newton.linear.direct = direct;
     RunOptions options;
     options.threads = threads;
     std::ostringstream log;
