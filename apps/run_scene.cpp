@@ -5,15 +5,12 @@
 #include <cstdio>
 #include <memory>
 
-#include "contact/material_depth.hpp"
-#include "contact/node_to_surface_contact.hpp"
+#include "apps/scene_model.hpp"
 #include "core/error.hpp"
-#include "core/lumped_mass.hpp"
 #include "core/results_file.hpp"
 #include "integrators/arkode_stepper.hpp"
-#include "integrators/gravity.hpp"
 #include "integrators/implicit_stepper.hpp"
-#include "integrators/stiffness_tether.hpp"
+#include "integrators/static_solver.hpp"
 #include "integrators/symplectic_euler.hpp"
 #include "integrators/thread_budget.hpp"
 
@@ -22,15 +19,6 @@ namespace depthfem {
 namespace {
 
 constexpr const char* kVersion = "0.1.0";
-
-// Newton tolerance [N]: relative tolerance x elastic force scale E h^2 x sqrt(#dofs), i.e. a
-// bound on the root-mean-square nodal residual relative to the force of unit strain on one cell.
-double newton_tolerance(const Scene& scene) {
-  double E = 0;
-  for (const ElasticGroup& g : scene.groups) E = std::max(E, material_moduli(g.material).youngs());
-  const double h = mean_edge_length(scene.mesh.X, scene.mesh.tets);
-  return scene.tolerance * E * h * h * std::sqrt(3.0 * scene.mesh.num_nodes());
-}
 
 std::string format(const char* fmt, auto... args) {
   char buf[256];
@@ -64,155 +52,64 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   const ThreadBudget budget(options.threads);
   const int threads = budget.threads();
   const auto start = std::chrono::steady_clock::now();
-
   RunResult result;
-  const Mesh& mesh = scene.mesh;
-  System system(mesh.num_nodes(), result.timers);
-  const Elasticity& elastic =
-      system.add(std::make_unique<Elasticity>(mesh.X, mesh.tets, scene.groups));
-  const VectorX mass = lumped_mass(mesh.X, mesh.tets, scene.tet_density);
-  if (scene.gravity.norm() > 0) system.add(std::make_unique<Gravity>(mass, scene.gravity));
-  // Time-dependent analyses: the implicit schemes carry inertia and damping as tethers.
-  const bool time_dependent = scene.analysis != "static";
-  const DynamicOptions& dyn_in = scene.dynamic_options;
-  ImplicitTerms terms;
-  if (time_dependent && (dyn_in.integrator == Integrator::kImplicitEuler ||
-                         dyn_in.integrator == Integrator::kNewmark)) {
-    if (scene.analysis == "dynamic")
-      terms.inertia = &system.add(std::make_unique<NodalSpring>("inertia", mass));
-    if (scene.analysis == "quasistatic") {
-      terms.damping.push_back(&system.add(std::make_unique<NodalSpring>(
-          "viscosity", quasi_viscosity_stiffness(mesh.X, mesh.tets, scene.viscosity))));
-    }
-    if (dyn_in.damping.mass > 0) {
-      terms.damping.push_back(
-          &system.add(std::make_unique<NodalSpring>("mass damping", dyn_in.damping.mass * mass)));
-    }
-    if (dyn_in.damping.stiffness > 0) {
-      terms.damping.push_back(&system.add(std::make_unique<StiffnessTether>(
-          "stiffness damping", elastic, dyn_in.damping.stiffness)));
-    }
-  }
-  NodalSpring* viscosity = nullptr;
-  if (scene.quasi_viscosity > 0) {
-    viscosity = &system.add(std::make_unique<NodalSpring>(
-        "quasi-viscosity", quasi_viscosity_stiffness(mesh.X, mesh.tets, scene.quasi_viscosity)));
-  }
-  // Contact is built only when the scene asks for it.
-  VectorX depth;
-  MaterialDepthContact* contact = nullptr;
-  if (scene.contact == ContactModel::kMaterialDepth) {
-    PhaseTimers::Scope t(result.timers, "collision detection: material depth");
-    depth = material_depth(mesh);
-    contact =
-        &system.add(std::make_unique<MaterialDepthContact>(mesh, depth, scene.contact_options));
-  } else if (scene.contact == ContactModel::kNodeToSurface) {
-    system.add(std::make_unique<NodeToSurfaceContact>(mesh, scene.contact_options.penalty));
-  }
-  ObstacleContact* obstacles = nullptr;
-  if (!scene.obstacles.empty()) {
-    std::vector<Index> deformable;
-    for (size_t b = 0; b < mesh.bodies.size(); ++b)
-      if (!scene.rigid[b]) deformable.push_back(static_cast<Index>(b));
-    obstacles = &system.add(std::make_unique<ObstacleContact>(mesh, deformable, scene.obstacles));
-  }
-  const Constraints constraints(mesh.X, scene.constraints);
-  StaticOptions opt = scene.static_options;
-  opt.newton.tolerance = newton_tolerance(scene);
 
+  // Build.
+  const std::unique_ptr<SceneModel> model = build_model(scene, result.timers);
+  const Mesh& mesh = scene.mesh;
+  const DynamicOptions& dyn = model->dynamic_options;
+
+  // Open the results.
   std::unique_ptr<ResultsFile> file;
   if (!options.out.empty()) {
     RunInfo info{scene.json_text, kVersion, scene.analysis, threads, {}};
     for (const Constraint& c : scene.constraints) info.constraint_names.push_back(c.name);
-    file = std::make_unique<ResultsFile>(options.out, mesh, depth, info);
+    file = std::make_unique<ResultsFile>(options.out, mesh, model->depth, info);
   }
   log << "scene " << scene.name << ": " << mesh.num_nodes() << " nodes, " << mesh.num_tets()
       << " tets, " << mesh.bodies.size() << " bodies, " << threads << " threads, linear solver "
-      << to_string(opt.newton.linear.kind) << ", Newton tolerance "
-      << format("%.3g", opt.newton.tolerance) << " N\n";
+      << to_string(model->static_options.newton.linear.kind) << ", Newton tolerance "
+      << format("%.3g", model->static_options.newton.tolerance) << " N\n";
 
-  result.x = mesh.X;
-  // One completed step (static increment or time step): summary, progress line, results file.
-  const auto record = [&](Index index, double load, const char* tag, const NewtonResult& newton,
-                          double seconds, const Points& x, const Points* v,
-                          const VectorX& gradient) {
-    StepSummary sum;
-    sum.load = load;
-    sum.newton_iterations = newton.iterations;
-    sum.linear_iterations = newton.linear_iterations;
-    sum.energy = newton.energy;
-    sum.residual = newton.residuals.back();
-    sum.reactions = constraints.reactions(gradient);
-    if (contact) {
-      sum.contact_area = contact->stats().area;
-      sum.contact_force = contact->stats().force;  // the step's gradient was just evaluated at x
-    }
-    if (obstacles) {
-      sum.contact_area = sum.contact_area.value_or(0) + obstacles->contact_area(x);
-      sum.contact_force = sum.contact_force.value_or(0) + obstacles->total_force(x).norm();
-    }
+  // Drive: every completed step is printed, written and kept.
+  const auto on_step = [&](const StepRecord& step, const Points& x, const Points* v) {
     log << format(
         "step %4d  %s %.4f%s  newton %2d  linear %5d  residual %.3e  energy % .6e  %.2f s\n",
-        int(index), v ? "time" : "load", load, tag, sum.newton_iterations, sum.linear_iterations,
-        sum.residual, sum.energy, seconds);
-    if (file) {
-      StepRecord rec;
-      rec.index = index;
-      rec.load = load;
-      rec.x = &x;
-      rec.v = v;
-      rec.newton_iterations = sum.newton_iterations;
-      rec.linear_iterations = sum.linear_iterations;
-      rec.energy = sum.energy;
-      rec.seconds = seconds;
-      rec.residuals = newton.residuals;
-      rec.reactions = sum.reactions;
-      rec.contact_area = sum.contact_area;
-      rec.contact_force = sum.contact_force;
-      file->append_step(rec);
-    }
-    result.steps.push_back(std::move(sum));
+        int(step.index), v ? "time" : "load", step.load, step.settling ? " (settle)" : "",
+        step.newton_iterations, step.linear_iterations, step.residuals.back(), step.energy,
+        step.seconds);
+    if (file) file->append_step(step, x, v);
+    result.steps.push_back(step);
+    if (options.observer) options.observer(step, x);
   };
+  StepLifecycle lifecycle(model->system, model->constraints, model->lifecycle_terms(), on_step);
+  result.x = mesh.X;
   try {
-    if (time_dependent) {
-      DynamicOptions dyn = dyn_in;
-      dyn.newton.tolerance = opt.newton.tolerance;
+    if (scene.analysis == "static") {
+      StaticSolver(lifecycle, model->quasi_viscosity, model->static_options).run(result.x);
+    } else {
       Points v = scene.initial_velocity;
-      const auto on_step = [&](const DynamicStep& s) {
-        NewtonResult newton =
-            s.newton;  // report the potential energy, not the incremental potential
-        newton.energy = s.potential_energy;
-        record(s.index, s.time, "", newton, s.seconds, *s.x, s.v, s.gradient);
-        StepSummary& sum = result.steps.back();
-        sum.kinetic_energy = 0.5 * (mass.array() * s.v->rowwise().squaredNorm().array()).sum();
-        sum.potential_energy = s.potential_energy;
-        if (options.observer) options.observer(sum, *s.x);
-      };
       switch (dyn.integrator) {
         case Integrator::kImplicitEuler:
         case Integrator::kNewmark:
-          ImplicitStepper(system, constraints, terms, dyn).run(result.x, v, on_step);
+          ImplicitStepper(lifecycle, model->implicit, dyn).run(result.x, v);
           break;
         case Integrator::kSymplecticEuler:
-          SymplecticEuler(system, constraints, mass, dyn,
+          SymplecticEuler(lifecycle, model->lumped_mass, dyn,
                           critical_time_step(mesh.X, mesh.tets, scene.tet_density, scene.groups))
-              .run(result.x, v, on_step);
+              .run(result.x, v);
           break;
         case Integrator::kArkode:
-          ArkodeStepper(system, constraints, mass, dyn).run(result.x, v, on_step);
+          ArkodeStepper(lifecycle, model->lumped_mass, dyn).run(result.x, v);
           break;
       }
-    } else {
-      StaticSolver(system, constraints, viscosity, opt).run(result.x, [&](const StaticStep& s) {
-        record(s.index, s.load, s.settling ? " (settle)" : "", s.newton, s.seconds, *s.x, nullptr,
-               s.gradient);
-        if (options.observer) options.observer(result.steps.back(), *s.x);
-      });
     }
     result.success = true;
   } catch (const SolveError& e) {
     result.message = e.what();
   }
+
+  // Finish.
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (file) {
     file->write_timing(result.timers.phases());

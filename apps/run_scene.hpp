@@ -1,44 +1,30 @@
 #pragma once
-/// Running a scene: builds its force modules, drives the solver, writes the results file.
+/// Running a scene: builds its model, drives the solver, writes the results file.
 
 #include <functional>
-#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
 
 #include "apps/scene.hpp"
 #include "core/phase_timer.hpp"
+#include "core/step_record.hpp"
 
 namespace depthfem {
-
-struct StepSummary;
 
 struct RunOptions {
   std::string out;  ///< results file (.h5); empty: no file
   int threads = 0;  ///< 0: all cores
-  /// Called after every completed step with its summary and positions (e.g. to sample a
+  /// Called after every completed step with its record and positions (e.g. to sample a
   /// trajectory without writing a file).
-  std::function<void(const StepSummary&, const Points& x)> observer;
-};
-
-/// Per-step summary kept in memory (the results file has everything).
-struct StepSummary {
-  double load = 0;
-  int newton_iterations = 0, linear_iterations = 0;
-  double energy = 0, residual = 0;
-  Eigen::Matrix<double, Eigen::Dynamic, 3> reactions;  ///< per boundary condition [N]
-  std::optional<double> contact_area;                  ///< [m^2], with contact or obstacles
-  std::optional<double> contact_force;  ///< [N]: obstacle force + sum over pairs of |pair force|
-  double kinetic_energy = 0;            ///< dynamic runs: sum m |v|^2 / 2 [J]
-  double potential_energy = 0;          ///< dynamic runs: E(x) without inertia and damping [J]
+  std::function<void(const StepRecord&, const Points& x)> observer;
 };
 
 /// Outcome of a run. On failure `message` says why; completed steps are kept.
 struct RunResult {
   bool success = false;
   std::string message;
-  std::vector<StepSummary> steps;
+  std::vector<StepRecord> steps;
   Points x;  ///< final positions (last completed step)
   PhaseTimers timers;
   double seconds = 0;

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <optional>
 #include <sstream>
 
 #include "apps/json_reader.hpp"
@@ -52,10 +53,25 @@ TetMesh read_body_mesh(JsonObject m, const std::string& scene_dir) {
 MaterialModel read_material(JsonObject m, Vec3& fiber_direction) {
   const std::string model = m.string("model");
   MaterialModel out;
-  const auto mooney = [&] { return MooneyRivlin{m.number("C1"), m.number("C2"), m.number("a")}; };
+  // Young's modulus and Poisson's ratio are converted by the model; its range errors are
+  // reported at the key.
+  const auto elastic_constants = [&](auto convert) {
+    const double E = m.number("youngs"), nu = m.number("poisson");
+    try {
+      return convert(E, nu);
+    } catch (const std::invalid_argument& e) {
+      m.fail("youngs", e.what());
+    }
+  };
+  const auto mooney = [&] {
+    if (!m.has("youngs")) return MooneyRivlin{m.number("C1"), m.number("C2"), m.number("a")};
+    const double C2 = m.number("C2", 0.0);
+    return elastic_constants(
+        [&](double E, double nu) { return MooneyRivlin::from_youngs(E, nu, C2); });
+  };
   const auto veronda = [&] { return Veronda{m.number("alpha"), m.number("beta"), m.number("a")}; };
   if (model == "neo_hookean") {
-    out = m.has("youngs") ? NeoHookean::from_youngs(m.number("youngs"), m.number("poisson"))
+    out = m.has("youngs") ? elastic_constants(NeoHookean::from_youngs)
                           : NeoHookean{m.number("mu"), m.number("lambda")};
   } else if (model == "mooney_rivlin") {
     out = mooney();
@@ -175,6 +191,14 @@ Obstacle read_obstacle(JsonObject o, size_t index) {
   return out;
 }
 
+// The options of one integrator ("newmark": {...}, "arkode": {...}), keyed by its name; an
+// error when the scene chose another integrator.
+std::optional<JsonObject> integrator_section(JsonObject& d, const char* integrator, bool chosen) {
+  if (!d.has(integrator)) return std::nullopt;
+  if (!chosen) d.fail(integrator, std::string("only for \"integrator\": \"") + integrator + "\"");
+  return d.object(integrator);
+}
+
 void read_dynamic(JsonObject d, Scene& scene) {
   DynamicOptions& o = scene.dynamic_options;
   o.integrator = d.choice<Integrator>("integrator", "integrator",
@@ -195,6 +219,20 @@ void read_dynamic(JsonObject d, Scene& scene) {
     scene.viscosity = d.number("viscosity");
     if (!(scene.viscosity > 0)) d.fail("viscosity", "must be > 0");
   }
+  o.mass = d.choice<MassMatrix>(
+      "mass", "mass matrix",
+      {{"lumped", MassMatrix::kLumped}, {"consistent", MassMatrix::kConsistent}});
+  if (o.mass == MassMatrix::kConsistent && explicit_scheme)
+    d.fail("mass", "a consistent mass matrix needs an implicit integrator");
+  if (std::optional<JsonObject> section =
+          integrator_section(d, "newmark", o.integrator == Integrator::kNewmark)) {
+    JsonObject& n = *section;
+    o.newmark.beta = n.number("beta", o.newmark.beta);
+    o.newmark.gamma = n.number("gamma", o.newmark.gamma);
+    if (!(o.newmark.beta > 0 && o.newmark.beta <= 0.5)) n.fail("beta", "must be in (0, 0.5]");
+    if (!(o.newmark.gamma >= 0.5 && o.newmark.gamma <= 1)) n.fail("gamma", "must be in [0.5, 1]");
+    n.finish();
+  }
   if (d.has("damping")) {
     JsonObject c = d.object("damping");
     o.damping.mass = c.number("mass", 0.0);
@@ -205,10 +243,9 @@ void read_dynamic(JsonObject d, Scene& scene) {
       c.fail("stiffness", "needs an implicit integrator");
     c.finish();
   }
-  if (d.has("arkode")) {
-    if (o.integrator != Integrator::kArkode)
-      d.fail("arkode", "only for \"integrator\": \"arkode\"");
-    JsonObject a = d.object("arkode");
+  if (std::optional<JsonObject> section =
+          integrator_section(d, "arkode", o.integrator == Integrator::kArkode)) {
+    JsonObject& a = *section;
     o.arkode.order = a.integer("order", o.arkode.order);
     o.arkode.relative_tolerance = a.number("relative_tolerance", o.arkode.relative_tolerance);
     o.arkode.absolute_tolerance = a.number("absolute_tolerance", o.arkode.absolute_tolerance);
@@ -249,6 +286,7 @@ void read_solver(JsonObject s, Scene& scene) {
   o.max_settle_steps = s.integer("max_settle_steps", o.max_settle_steps);
   scene.quasi_viscosity = s.number("quasi_viscosity", 0.0);
   scene.tolerance = s.number("tolerance", scene.tolerance);
+  scene.ramp_body_loads = s.boolean("ramp_body_loads", scene.ramp_body_loads);
   if (!(o.min_increment > 0 && o.min_increment <= o.initial_increment && o.initial_increment <= 1 &&
         o.max_increment >= o.initial_increment)) {
     s.fail(

@@ -33,8 +33,9 @@ struct Scene {
   ContactModel contact = ContactModel::kNone;
   ContactOptions contact_options;
   std::vector<Obstacle> obstacles;
-  double quasi_viscosity = 0;  ///< [Pa]; 0: off
-  double tolerance = 1e-9;     ///< relative Newton tolerance (see scene docs)
+  double quasi_viscosity = 0;   ///< [Pa]; 0: off
+  double tolerance = 1e-9;      ///< relative Newton tolerance (see scene docs)
+  bool ramp_body_loads = true;  ///< static analysis: gravity scales with the load factor
   StaticOptions static_options;
   DynamicOptions dynamic_options;  ///< analyses "dynamic" and "quasistatic"
   double viscosity = 0;            ///< [Pa s] of a quasistatic analysis

@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
         std::ostringstream log;
         const RunResult r = run_scene(scene, RunOptions(), log);
         long newton = 0, linear = 0;
-        for (const StepSummary& s : r.steps) {
+        for (const StepRecord& s : r.steps) {
           newton += s.newton_iterations;
           linear += s.linear_iterations;
         }

@@ -47,7 +47,7 @@ Trajectory run_case(const std::string& scene_path, std::vector<Override> o,
   const bool explicit_rk = scene.dynamic_options.integrator == Integrator::kArkode;
   RunOptions options;
   options.threads = 1;
-  options.observer = [&](const StepSummary& s, const Points& x) {
+  options.observer = [&](const StepRecord& s, const Points& x) {
     t.steps += explicit_rk ? s.newton_iterations : 1;
     if (!explicit_rk) t.newton += s.newton_iterations;
     const double k = s.load / kSampleInterval;

@@ -28,7 +28,8 @@ MaterialDepthContact::MaterialDepthContact(const Mesh& mesh, VectorX depth, Cont
       tet_body_(mesh.tet_body),
       tri_body_(mesh.tri_body),
       depth_(std::move(depth)),
-      options_(options) {
+      options_(options),
+      interfaces_(mesh.bodies, options.self_contact) {
   // Sub-triangles with area below 1e-12 of a typical element face count as degenerate.
   const double h = mean_edge_length(mesh.X, mesh.tets);
   min_area2_ = std::pow(1e-12 * h * h, 2);
@@ -40,7 +41,7 @@ std::array<Index, 7> MaterialDepthContact::pair_nodes(const ContactPair& p) cons
           tris_(p.tri, 0), tris_(p.tri, 1), tris_(p.tri, 2)};
 }
 
-void MaterialDepthContact::begin_step(const Points& x, double) {
+void MaterialDepthContact::begin_step(const Points& x) {
   tree_ = AabbTree(tet_boxes(x, tets_));
 }
 
@@ -75,11 +76,6 @@ void MaterialDepthContact::prepare(const Points& x) {
     stats_.candidates += candidates[c];
   }
   stats_.active = static_cast<Index>(pairs_.size());
-  for (const ContactPair& p : pairs_) {
-    for (int k = 1; k + 1 < p.polygon.size; ++k)
-      stats_.area +=
-          0.5 * (p.polygon.x[k] - p.polygon.x[0]).cross(p.polygon.x[k + 1] - p.polygon.x[0]).norm();
-  }
   // A pair whose nodes are not coupled in the bound pattern needs a new pattern.
   pattern_changed_ = false;
   if (bound_) {
@@ -148,11 +144,9 @@ double MaterialDepthContact::evaluate(const Points& x, VectorX* gradient,
       energies[k] = pair_derivatives(x, pairs_[k], gradients[k], hessian ? &hessians[k] : nullptr);
   });
   double energy = 0;
-  stats_.force = 0;
   for (Index k = 0; k < n; ++k) {
     const std::array<Index, 7> v = pair_nodes(pairs_[k]);
     energy += energies[k];
-    stats_.force += gradients[k].tail<9>().reshaped(3, 3).rowwise().sum().norm();
     for (int a = 0; a < 7; ++a) gradient->segment<3>(3 * v[a]) += gradients[k].segment<3>(3 * a);
     if (!hessian) continue;
     for (int a = 0; a < 7; ++a)
@@ -160,6 +154,27 @@ double MaterialDepthContact::evaluate(const Points& x, VectorX* gradient,
         hessian->add_block(hessian->block_index(v[a], v[b]), hessians[k].block<3, 3>(3 * a, 3 * b));
   }
   return energy;
+}
+
+void MaterialDepthContact::report(const Points& x, StepRecord& step) const {
+  const Index n = static_cast<Index>(pairs_.size());
+  std::vector<PairGradient> gradients(static_cast<size_t>(n));
+  tbb::parallel_for(tbb::blocked_range<Index>(0, n, 16), [&](const tbb::blocked_range<Index>& r) {
+    for (Index k = r.begin(); k < r.end(); ++k)
+      pair_derivatives(x, pairs_[k], gradients[k], nullptr);
+  });
+  ContactInterfaces::Tally tally = interfaces_.tally(step);
+  for (Index k = 0; k < n; ++k) {  // in pair order: the same sums for any number of threads
+    const ContactPair& p = pairs_[k];
+    // The penalty pushes the triangle out of the tet: -grad W on the triangle's side.
+    const Vec3 on_triangle = -gradients[k].tail<9>().reshaped(3, 3).rowwise().sum();
+    double area = 0;
+    for (int j = 1; j + 1 < p.polygon.size; ++j)
+      area +=
+          0.5 * (p.polygon.x[j] - p.polygon.x[0]).cross(p.polygon.x[j + 1] - p.polygon.x[0]).norm();
+    tally.add(tri_body_(p.tri), tet_body_(p.tet), on_triangle, area);
+  }
+  tally.finish();
 }
 
 }  // namespace depthfem

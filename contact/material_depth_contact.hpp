@@ -7,6 +7,7 @@
 
 #include "contact/aabb_tree.hpp"
 #include "contact/clip.hpp"
+#include "contact/contact_interfaces.hpp"
 #include "contact/penalty_derivatives.hpp"
 #include "core/force_module.hpp"
 #include "core/mesh.hpp"
@@ -24,13 +25,10 @@ struct ContactPair {
   ClipPolygon polygon;
 };
 
-/// What the active pairs amount to at the last prepare() (and evaluate(), for the force).
+/// How many pairs the last prepare() examined and kept.
 struct ContactStats {
   Index candidates = 0;  ///< triangle-tet pairs whose boxes overlap
   Index active = 0;      ///< pairs with an intersection polygon
-  double area = 0;       ///< total intersection area [m^2]
-  double force = 0;      ///< sum over pairs of |penalty force on the triangle| [N], from the
-                         ///< last evaluation with a gradient
 };
 
 /// The contact force module. Geometry (tree, clipping, depth lookup) lives in aabb_tree, clip
@@ -43,12 +41,16 @@ class MaterialDepthContact final : public ForceModule {
   MaterialDepthContact(const Mesh& mesh, VectorX depth, ContactOptions options);
 
   std::string name() const override { return "contact"; }
-  void begin_step(const Points& x, double load) override;
+  void begin_step(const Points& x) override;
   void prepare(const Points& x) override;
   void add_couplings(SparsityBuilder& builder) const override;
   void bind(const BlockSparseMatrix& hessian) override;
   bool pattern_changed() const override { return pattern_changed_; }
   double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
+  /// One row per interface (ContactInterfaces): every pair of bodies "a/b" and, with
+  /// self-contact, every body against itself "a (self)"; areas are those of the clipped
+  /// triangles.
+  void report(const Points& x, StepRecord& step) const override;
 
   const std::vector<ContactPair>& pairs() const { return pairs_; }
   ContactStats stats() const { return stats_; }
@@ -71,7 +73,8 @@ class MaterialDepthContact final : public ForceModule {
   double min_area2_ = 0;
   AabbTree tree_;
   std::vector<ContactPair> pairs_;
-  mutable ContactStats stats_;  // evaluate() records the force it computes anyway
+  ContactStats stats_;
+  ContactInterfaces interfaces_;
   const BlockSparseMatrix* bound_ = nullptr;
   bool pattern_changed_ = false;
 };

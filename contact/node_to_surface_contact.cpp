@@ -24,7 +24,8 @@ NodeToSurfaceContact::NodeToSurfaceContact(const Mesh& mesh, double penalty)
       tris_(mesh.tris),
       tet_body_(mesh.tet_body),
       tri_body_(mesh.tri_body),
-      penalty_(penalty) {
+      penalty_(penalty),
+      interfaces_(mesh.bodies, false) {
   node_area_ = VectorX::Zero(mesh.num_nodes());
   node_body_ = IndexVector::Constant(mesh.num_nodes(), -1);
   for (Index f = 0; f < tris_.rows(); ++f) {
@@ -38,10 +39,10 @@ NodeToSurfaceContact::NodeToSurfaceContact(const Mesh& mesh, double penalty)
   }
   for (Index i = 0; i < mesh.num_nodes(); ++i)
     if (node_area_(i) > 0) surface_nodes_.push_back(i);
-  begin_step(mesh.X, 0);
+  begin_step(mesh.X);
 }
 
-void NodeToSurfaceContact::begin_step(const Points& x, double) {
+void NodeToSurfaceContact::begin_step(const Points& x) {
   tet_tree_ = AabbTree(tet_boxes(x, tets_));
   tri_tree_ = AabbTree(triangle_boxes(x, tris_));
 }
@@ -109,8 +110,7 @@ double NodeToSurfaceContact::evaluate(const Points& x, VectorX* gradient,
                             eps_area);
       continue;
     }
-    const D W = node_energy(make_point<D>(x.row(v[0]), 0), make_point<D>(x.row(v[1]), 3),
-                            make_point<D>(x.row(v[2]), 6), make_point<D>(x.row(v[3]), 9), eps_area);
+    const D W = pair_derivatives(x, i, f);
     energy += W.v;
     for (int a = 0; a < 4; ++a) {
       gradient->segment<3>(3 * v[a]) += W.g.segment<3>(3 * a);
@@ -120,6 +120,22 @@ double NodeToSurfaceContact::evaluate(const Points& x, VectorX* gradient,
     }
   }
   return energy;
+}
+
+Dual2<12> NodeToSurfaceContact::pair_derivatives(const Points& x, Index i, Index f) const {
+  using D = Dual2<12>;
+  return node_energy(make_point<D>(x.row(i), 0), make_point<D>(x.row(tris_(f, 0)), 3),
+                     make_point<D>(x.row(tris_(f, 1)), 6), make_point<D>(x.row(tris_(f, 2)), 9),
+                     penalty_ * node_area_(i));
+}
+
+void NodeToSurfaceContact::report(const Points& x, StepRecord& step) const {
+  ContactInterfaces::Tally tally = interfaces_.tally(step);
+  for (const auto& [i, f] : pairs_) {
+    const Vec3 on_node = -pair_derivatives(x, i, f).g.head<3>();
+    tally.add(node_body_(i), tri_body_(f), on_node, node_area_(i));
+  }
+  tally.finish();
 }
 
 }  // namespace depthfem

@@ -8,6 +8,8 @@
 #include <vector>
 
 #include "contact/aabb_tree.hpp"
+#include "contact/contact_interfaces.hpp"
+#include "contact/dual.hpp"
 #include "core/force_module.hpp"
 #include "core/mesh.hpp"
 
@@ -18,17 +20,23 @@ class NodeToSurfaceContact final : public ForceModule {
   NodeToSurfaceContact(const Mesh& mesh, double penalty);
 
   std::string name() const override { return "node-to-surface contact"; }
-  void begin_step(const Points& x, double load) override;
+  void begin_step(const Points& x) override;
   void prepare(const Points& x) override;
   void add_couplings(SparsityBuilder& builder) const override;
   void bind(const BlockSparseMatrix& hessian) override;
   bool pattern_changed() const override { return pattern_changed_; }
   double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
+  /// One row per pair of bodies "a/b" (ContactInterfaces); a pair's area is the boundary area
+  /// share of its node.
+  void report(const Points& x, StepRecord& step) const override;
 
   /// Active (node, triangle) pairs of the last prepare().
   const std::vector<std::pair<Index, Index>>& pairs() const { return pairs_; }
 
  private:
+  /// Energy of node i against triangle f with derivatives in (node, triangle corners).
+  Dual2<12> pair_derivatives(const Points& x, Index i, Index f) const;
+
   TetIndices tets_;
   TriIndices tris_;
   IndexVector tet_body_, tri_body_;
@@ -38,6 +46,7 @@ class NodeToSurfaceContact final : public ForceModule {
   double penalty_;
   AabbTree tet_tree_, tri_tree_;
   std::vector<std::pair<Index, Index>> pairs_;
+  ContactInterfaces interfaces_;
   const BlockSparseMatrix* bound_ = nullptr;
   bool pattern_changed_ = false;
 };

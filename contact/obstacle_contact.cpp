@@ -59,7 +59,7 @@ ObstacleContact::ObstacleContact(const Mesh& mesh, const std::vector<Index>& bod
     tris_.row(static_cast<Index>(k)) = mesh.tris.row(rows[k]);
 }
 
-void ObstacleContact::begin_step(const Points&, double load) {
+void ObstacleContact::set_load(double load) {
   load_ = load;
 }
 
@@ -95,6 +95,12 @@ S ObstacleContact::triangle_energy(const Obstacle& o, const Corner& Q) const {
   return field_polygon_penalty(poly, Q, G, o.penalty, 0.0);
 }
 
+Dual2<9> ObstacleContact::triangle_derivatives(const Points& x, Index o, Index f) const {
+  std::array<V3<Dual2<9>>, 3> Q;
+  for (int k = 0; k < 3; ++k) Q[k] = make_point<Dual2<9>>(x.row(tris_(f, k)), 3 * k);
+  return triangle_energy<Dual2<9>>(obstacles_[o], Q);
+}
+
 double ObstacleContact::evaluate(const Points& x, VectorX* gradient,
                                  BlockSparseMatrix* hessian) const {
   using D = Dual2<9>;
@@ -106,9 +112,7 @@ double ObstacleContact::evaluate(const Points& x, VectorX* gradient,
       energy += triangle_energy<double>(obstacles_[o], Q);
       continue;
     }
-    std::array<V3<D>, 3> Q;
-    for (int k = 0; k < 3; ++k) Q[k] = make_point<D>(x.row(tris_(f, k)), 3 * k);
-    const D W = triangle_energy<D>(obstacles_[o], Q);
+    const D W = triangle_derivatives(x, o, f);
     energy += W.v;
     for (int a = 0; a < 3; ++a) {
       gradient->segment<3>(3 * tris_(f, a)) += W.g.segment<3>(3 * a);
@@ -121,30 +125,28 @@ double ObstacleContact::evaluate(const Points& x, VectorX* gradient,
   return energy;
 }
 
-Vec3 ObstacleContact::total_force(const Points& x) const {
-  VectorX g = VectorX::Zero(3 * x.rows());
-  evaluate(x, &g, nullptr);
-  return -Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(g.data(),
-                                                                                      x.rows(), 3)
-              .colwise()
-              .sum()
-              .transpose();
-}
-
-double ObstacleContact::contact_area(const Points& x) const {
-  double area = 0;
+void ObstacleContact::report(const Points& x, StepRecord& step) const {
+  const size_t first = step.contact.size();
+  for (const Obstacle& o : obstacles_)
+    step.contact.push_back({"obstacle " + o.name, Vec3::Zero(), 0, 0});
   for (const auto& [o, f] : active_) {
     std::array<Vec3, 3> q;
+    std::array<V3<double>, 3> Q;
     std::array<double, 3> G;
     for (int k = 0; k < 3; ++k) {
       q[k] = x.row(tris_(f, k));
-      G[k] = obstacle_depth<double>(obstacles_[o], load_, make_point<double>(q[k], 0));
+      Q[k] = make_point<double>(q[k], 0);
+      G[k] = obstacle_depth<double>(obstacles_[o], load_, Q[k]);
     }
+    InterfaceForce& row = step.contact[first + static_cast<size_t>(o)];
     const ClipPolygon p = clip_triangle_by_field(q, G);
     for (int k = 1; k + 1 < p.size; ++k)
-      area += 0.5 * (p.x[k] - p.x[0]).cross(p.x[k + 1] - p.x[0]).norm();
+      row.area += 0.5 * (p.x[k] - p.x[0]).cross(p.x[k + 1] - p.x[0]).norm();
+    const Dual2<9> W = triangle_derivatives(x, o, f);  // the force on the triangle is -grad W
+    const Vec3 on_triangle = -W.g.reshaped(3, 3).rowwise().sum();
+    row.force += on_triangle;
+    row.magnitude += on_triangle.norm();
   }
-  return area;
 }
 
 }  // namespace depthfem

@@ -7,6 +7,7 @@
 #include <variant>
 #include <vector>
 
+#include "contact/dual.hpp"
 #include "core/force_module.hpp"
 #include "core/mesh.hpp"
 
@@ -39,19 +40,22 @@ class ObstacleContact final : public ForceModule {
                   std::vector<Obstacle> obstacles);
 
   std::string name() const override { return "obstacles"; }
-  void begin_step(const Points& x, double load) override;
+  void set_load(double load) override;
   void prepare(const Points& x) override;
   void add_couplings(SparsityBuilder& builder) const override;
   bool pattern_changed() const override { return false; }
   double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
 
-  /// Force the obstacles exert on the bodies [N] and the area pressed [m^2] at x.
-  Vec3 total_force(const Points& x) const;
-  double contact_area(const Points& x) const;
+  /// One row per obstacle, "obstacle NAME": the force it exerts on the bodies [N] (and its
+  /// magnitudes summed over triangles) and the boundary area inside it [m^2] at x.
+  void report(const Points& x, StepRecord& step) const override;
 
  private:
   template <class S, class Corner>
   S triangle_energy(const Obstacle& o, const Corner& Q) const;
+  /// Energy of triangle f against obstacle o with its gradient and Hessian in the 9 corner
+  /// coordinates.
+  Dual2<9> triangle_derivatives(const Points& x, Index o, Index f) const;
 
   TriIndices tris_;
   std::vector<Obstacle> obstacles_;

@@ -1,9 +1,11 @@
 #pragma once
 /// The one interface integrators see: an energy of the current positions with derivatives.
 
+#include <limits>
 #include <string>
 
 #include "core/block_sparse_matrix.hpp"
+#include "core/step_record.hpp"
 #include "core/types.hpp"
 
 namespace depthfem {
@@ -11,6 +13,9 @@ namespace depthfem {
 /// A force contribution written as an energy E(x) over current node positions, with gradient and
 /// Hessian. Elasticity, gravity, inertia, viscosity and contact all implement it. Gradients are
 /// vectors of 3 * #nodes entries, interleaved (dof 3 * node + component).
+///
+/// The step lifecycle calls, per step: begin_step and set_load once; then prepare before every
+/// evaluation at a new configuration; then prepare, evaluate and report at the converged state.
 class ForceModule {
  public:
   virtual ~ForceModule() = default;
@@ -18,9 +23,14 @@ class ForceModule {
   /// Short name used in timing tables and messages.
   virtual std::string name() const = 0;
 
-  /// Once per load increment or time step, from its converged start x towards load factor (or
-  /// time) `load`: rebuild a tree, place a moving obstacle.
-  virtual void begin_step(const Points& /*x*/, double /*load*/) {}
+  /// Once per load increment or time step, from its converged start x: rebuild a tree, take a
+  /// matrix at the start of the step.
+  virtual void begin_step(const Points& /*x*/) {}
+
+  /// The load factor (static) or fraction of the duration (time-dependent) at which the next
+  /// evaluations hold: places a moving obstacle, scales a ramped load. Cheap; explicit
+  /// integrators call it at every stage.
+  virtual void set_load(double /*load*/) {}
 
   /// Once per iterate before evaluation (refit a tree, find contact pairs). Default: nothing.
   virtual void prepare(const Points& /*x*/) {}
@@ -39,6 +49,16 @@ class ForceModule {
   /// non-null, adds grad E to `gradient` [N] and hess E into `hessian` [N/m] (after bind()).
   /// Gradient and Hessian are meaningful only where the energy is finite.
   virtual double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const = 0;
+
+  /// Largest alpha > 0 such that every x + a dx with 0 <= a < alpha is legal for this module
+  /// (finite energy); +infinity where no step along dx is illegal. The line search starts below it.
+  virtual double max_step(const Points& /*x*/, const Points& /*dx*/) const {
+    return std::numeric_limits<double>::infinity();
+  }
+
+  /// Adds what this module knows about the converged state x (after prepare(x)) to the step's
+  /// record: contact modules append one row per interface, in a fixed order.
+  virtual void report(const Points& /*x*/, StepRecord& /*step*/) const {}
 };
 
 }  // namespace depthfem

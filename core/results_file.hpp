@@ -8,10 +8,13 @@
 ///   /mesh/body_names (#bodies strings);
 ///   /run attributes scene, version, threads, analysis, status ("running", "completed", "failed"),
 ///   message, and dataset /run/constraint_names (#constraints strings);
-///   /steps/NNNNNN (6-digit step index) attributes index, load, newton_iterations,
-///   linear_iterations, energy [J], seconds, optional contact_area [m^2] and contact_force [N],
-///   datasets x (#nodes x 3 f64 [m]), optional v (#nodes x 3 f64 [m/s]), residuals (one norm per
-///   Newton iteration), reactions (#constraints x 3 f64 [N]);
+///   /steps/NNNNNN (6-digit step index) attributes index, load, settling (i32 0/1),
+///   newton_iterations, linear_iterations, energy [J], seconds, with velocities kinetic_energy
+///   [J], with contact contact_area [m^2] (total); datasets x (#nodes x 3 f64 [m]), optional v
+///   (#nodes x 3 f64 [m/s]), residuals (one norm per Newton iteration), reactions (#constraints
+///   x 3 f64 [N]), with contact contact_forces (#interfaces x 3 f64 [N]),
+///   contact_force_magnitudes (#interfaces f64 [N]) and contact_areas (#interfaces f64 [m^2]),
+///   whose row names are /run/contact_names (written with the first step);
 ///   /timing attributes, one f64 [s] per phase, in the order given.
 
 #include <memory>
@@ -21,23 +24,9 @@
 #include <vector>
 
 #include "core/mesh.hpp"
+#include "core/step_record.hpp"
 
 namespace depthfem {
-
-/// One completed step, as written to /steps/<index>.
-struct StepRecord {
-  Index index = 0;
-  double load = 0;            ///< load factor (static) or time [s] (dynamic)
-  const Points* x = nullptr;  ///< #nodes x 3 current positions [m], required
-  const Points* v = nullptr;  ///< #nodes x 3 velocities [m/s], or null
-  int newton_iterations = 0, linear_iterations = 0;
-  double energy = 0;                                   ///< total energy [J]
-  double seconds = 0;                                  ///< wall time of the step [s]
-  std::vector<double> residuals;                       ///< residual norm of each Newton iteration
-  Eigen::Matrix<double, Eigen::Dynamic, 3> reactions;  ///< #constraints x 3 constraint forces [N]
-  std::optional<double> contact_area;                  ///< [m^2], written only when set
-  std::optional<double> contact_force;                 ///< [N], written only when set
-};
 
 /// Metadata of a run written to /run at creation.
 struct RunInfo {
@@ -62,8 +51,10 @@ class ResultsFile {
   ResultsFile(const ResultsFile&) = delete;
   ResultsFile& operator=(const ResultsFile&) = delete;
 
-  /// Writes /steps/<index>; throws if that step exists or the array sizes do not match the mesh.
-  void append_step(const StepRecord& step);
+  /// Writes /steps/<index> with positions x and, for time-dependent runs, velocities v (or
+  /// null); throws if that step exists, the array sizes do not match the mesh, or the contact
+  /// interfaces differ from those of the first step.
+  void append_step(const StepRecord& step, const Points& x, const Points* v);
   /// (Re)writes /timing with one attribute per (phase name, seconds), in this order.
   void write_timing(const std::vector<std::pair<std::string, double>>& phases);
   /// Sets /run status to "completed" (success) or "failed", and /run message.

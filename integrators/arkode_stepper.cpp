@@ -27,8 +27,7 @@ struct StepperDeleter {
 
 // What the right-hand side needs, and the first error it or ARKODE reports.
 struct RhsData {
-  System& system;
-  const Constraints& constraints;
+  StepLifecycle& lifecycle;
   const VectorX& mass;
   double alpha, duration;
   Index nodes;
@@ -46,10 +45,11 @@ int rhs(realtype t, N_Vector y_vec, N_Vector ydot_vec, void* user) {
   Eigen::Map<VectorX> ydot = view(ydot_vec);
   const Index n = 3 * d.nodes;
   Points x = as_points(y.head(n));
-  d.constraints.impose(t / d.duration, x);
-  d.system.prepare(x);
+  const Constraints& constraints = d.lifecycle.constraints();
+  constraints.impose(t / d.duration, x);
+  d.lifecycle.set_load(t / d.duration);
   VectorX g;
-  if (!std::isfinite(d.system.gradient(x, g))) {
+  if (!std::isfinite(d.lifecycle.gradient(x, g))) {
     d.error = "an element inverted at t = " + std::to_string(t) + " s";
     return -1;  // unrecoverable: ERKStep has no step retry on right-hand-side failures
   }
@@ -58,8 +58,8 @@ int rhs(realtype t, N_Vector y_vec, N_Vector ydot_vec, void* user) {
   for (Index i = 0; i < d.nodes; ++i)
     accel.segment<3>(3 * i) =
         -g.segment<3>(3 * i) / d.mass(i) - d.alpha * velocity.segment<3>(3 * i);
-  d.constraints.project(velocity);
-  d.constraints.project(accel);
+  constraints.project(velocity);
+  constraints.project(accel);
   ydot.head(n) = velocity;
   ydot.tail(n) = accel;
   return 0;
@@ -78,9 +78,8 @@ void check(int flag, const char* call) {
 
 }  // namespace
 
-ArkodeStepper::ArkodeStepper(System& system, const Constraints& constraints, VectorX mass,
-                             DynamicOptions options)
-    : system_(system), constraints_(constraints), mass_(std::move(mass)), options_(options) {
+ArkodeStepper::ArkodeStepper(StepLifecycle& lifecycle, VectorX mass, DynamicOptions options)
+    : lifecycle_(lifecycle), mass_(std::move(mass)), options_(options) {
   if (!has_erk_table(options_.arkode.order)) {
     throw InputError("arkode: no explicit Runge-Kutta table of order " +
                      std::to_string(options_.arkode.order) + " (expected 2, 3, 4, 5, 6 or 8)");
@@ -88,9 +87,12 @@ ArkodeStepper::ArkodeStepper(System& system, const Constraints& constraints, Vec
   if (options_.damping.stiffness != 0) {
     throw InputError("arkode: stiffness-proportional damping needs an implicit integrator");
   }
+  if (options_.mass != MassMatrix::kLumped)
+    throw InputError("arkode: a consistent mass matrix needs an implicit integrator");
 }
 
-void ArkodeStepper::run(Points& x, Points& v, const StepCallback& on_step) {
+void ArkodeStepper::run(Points& x, Points& v) {
+  const Constraints& constraints = lifecycle_.constraints();
   const Index nodes = static_cast<Index>(x.rows());
   const Index n = 3 * nodes;
   SUNContext raw_ctx = nullptr;
@@ -100,7 +102,7 @@ void ArkodeStepper::run(Points& x, Points& v, const StepCallback& on_step) {
       N_VNew_Serial(2 * n, ctx.get()));
   view(y.get()) << as_dofs(x), as_dofs(v);
 
-  RhsData data{system_, constraints_, mass_, options_.damping.mass, options_.duration, nodes, {}};
+  RhsData data{lifecycle_, mass_, options_.damping.mass, options_.duration, nodes, {}};
   const std::unique_ptr<void, StepperDeleter> mem(ERKStepCreate(rhs, 0.0, y.get(), ctx.get()));
   if (!mem) throw SolveError("arkode: ERKStepCreate failed");
   const ArkodeOptions& o = options_.arkode;
@@ -112,12 +114,12 @@ void ArkodeStepper::run(Points& x, Points& v, const StepCallback& on_step) {
   check(ERKStepSetMaxNumSteps(mem.get(), o.max_steps), "ERKStepSetMaxNumSteps");
   check(ERKStepSetStopTime(mem.get(), options_.duration), "ERKStepSetStopTime");
 
-  const double h = options_.time_step;
   const Index steps = time_step_count(options_);
   long internal_before = 0;
+  double t_start = 0;
   for (Index k = 0; k < steps; ++k) {
-    const auto start = std::chrono::steady_clock::now();
-    const double target = std::min((k + 1) * h, options_.duration);
+    const double target = step_end_time(options_, k);
+    lifecycle_.begin(x, t_start / options_.duration);
     realtype t = 0;
     const int flag = ERKStepEvolve(mem.get(), target, y.get(), &t, ARK_NORMAL);
     if (flag < 0) {
@@ -129,14 +131,14 @@ void ArkodeStepper::run(Points& x, Points& v, const StepCallback& on_step) {
     }
     const Points before = x;
     x = as_points(view(y.get()).head(n));
-    constraints_.impose(t / options_.duration, x);
+    constraints.impose(t / options_.duration, x);
     // Free directions take ARKODE's velocity, constrained ones the prescribed motion over the
     // interval.
     VectorX velocity = view(y.get()).tail(n);
-    VectorX prescribed = as_dofs(x - before) / h;
-    constraints_.project(velocity);
+    VectorX prescribed = as_dofs(x - before) / (t - t_start);
+    constraints.project(velocity);
     VectorX free_part = prescribed;
-    constraints_.project(free_part);
+    constraints.project(free_part);
     v = as_points(velocity + prescribed - free_part);
     long internal = 0;
     ERKStepGetNumSteps(mem.get(), &internal);
@@ -146,7 +148,9 @@ void ArkodeStepper::run(Points& x, Points& v, const StepCallback& on_step) {
     explicit_step.iterations = static_cast<int>(internal - internal_before);
     explicit_step.residuals.push_back(0.0);
     internal_before = internal;
-    report_time_step(system_, {}, k, t, std::move(explicit_step), x, v, start, on_step);
+    t_start = t;
+    lifecycle_.set_load(t / options_.duration);
+    lifecycle_.complete(t, explicit_step, x, &v);
   }
 }
 

@@ -5,26 +5,25 @@
 /// where P removes the constrained directions and grad E is evaluated with the Dirichlet
 /// conditions imposed at time t, so they hold exactly at every stage and output.
 
-#include "integrators/constraints.hpp"
 #include "integrators/dynamics.hpp"
-#include "integrators/system.hpp"
+#include "integrators/step_lifecycle.hpp"
 
 namespace depthfem {
 
 class ArkodeStepper {
  public:
-  /// Throws InputError for an order without a default table or stiffness-proportional damping.
-  ArkodeStepper(System& system, const Constraints& constraints, VectorX mass,
-                DynamicOptions options);
+  /// Throws InputError for an order without a default table, stiffness-proportional damping or
+  /// a consistent mass.
+  ArkodeStepper(StepLifecycle& lifecycle, VectorX mass, DynamicOptions options);
 
-  /// Advances (x, v) to the end time, reporting every options.time_step of simulated time (the
-  /// internal steps are ARKODE's). Throws SolveError with ARKODE's flag and message on failure
-  /// (the outputs reported so far stay valid).
-  void run(Points& x, Points& v, const StepCallback& on_step);
+  /// Advances (x, v) to the end time, completing a step through the lifecycle every
+  /// options.time_step of simulated time (the internal steps are ARKODE's; every stage moves the
+  /// modules to its time). Throws SolveError with ARKODE's flag and message on failure (the steps
+  /// completed so far stay valid).
+  void run(Points& x, Points& v);
 
  private:
-  System& system_;
-  const Constraints& constraints_;
+  StepLifecycle& lifecycle_;
   VectorX mass_;
   DynamicOptions options_;
 };

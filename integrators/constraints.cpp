@@ -28,8 +28,13 @@ Constraints::Constraints(const Points& X, std::vector<Constraint> list)
     : X_(X), list_(std::move(list)) {
   const Index n = static_cast<Index>(X.rows());
   slot_.assign(static_cast<size_t>(n), -1);
-  // Per node: constrained directions (columns) with their offsets per unit load.
-  std::vector<std::vector<std::pair<Vec3, double>>> planes(static_cast<size_t>(n));
+  // Per node: constrained directions with their offsets per unit load and their condition.
+  struct Plane {
+    Vec3 normal;
+    double offset;
+    Index condition;
+  };
+  std::vector<std::vector<Plane>> planes(static_cast<size_t>(n));
   std::vector<Index> full(static_cast<size_t>(n), -1);
   std::vector<char> touched(static_cast<size_t>(n), 0);
   for (size_t k = 0; k < list_.size(); ++k) {
@@ -41,14 +46,15 @@ Constraints::Constraints(const Points& X, std::vector<Constraint> list)
                          " outside 0.." + std::to_string(n - 1));
       }
       touched[i] = 1;
+      const Index ck = static_cast<Index>(k);
       std::visit(Overloaded{[&](const InPlane& p) {
-                              planes[i].emplace_back(unit(p.normal, c.name, "normal"), p.offset);
+                              planes[i].push_back({unit(p.normal, c.name, "normal"), p.offset, ck});
                             },
                             [&](const OnLine& l) {
                               const Vec3 a = unit(l.direction, c.name, "direction");
                               const Vec3 b = a.unitOrthogonal(), d = a.cross(b);
-                              planes[i].emplace_back(b, 0.0);
-                              planes[i].emplace_back(d, 0.0);
+                              planes[i].push_back({b, 0.0, ck});
+                              planes[i].push_back({d, 0.0, ck});
                             },
                             [&](const Rotated& r) {
                               unit(r.axis, c.name, "axis");
@@ -60,12 +66,15 @@ Constraints::Constraints(const Points& X, std::vector<Constraint> list)
   }
   for (Index i = 0; i < n; ++i) {
     if (!touched[i]) continue;
-    NodeState s{i, Mat3::Identity(), full[i], Vec3::Zero()};
-    if (full[i] < 0) {
+    NodeState s{i, Mat3::Identity(), full[i], Vec3::Zero(), {}};
+    if (full[i] >= 0) {
+      s.owners.emplace_back(full[i], Mat3::Identity());
+    } else {
       // Gram-Schmidt over the plane normals: C = sum b b^T over the orthonormal basis b, and
-      // shift_per_load solves n_k . shift = offset_k for every condition on the node.
+      // shift_per_load solves n_k . shift = offset_k for every condition on the node. Each b
+      // belongs to the condition whose normal added it.
       s.C.setZero();
-      for (const auto& [n_k, offset] : planes[i]) {
+      for (const auto& [n_k, offset, condition] : planes[i]) {
         Vec3 b = n_k;
         for (int r = 0; r < 3; ++r) b -= s.C * b;  // (repeated for round-off)
         const double len = b.norm();
@@ -74,6 +83,9 @@ Constraints::Constraints(const Points& X, std::vector<Constraint> list)
           b /= len;
           s.shift_per_load += (missing / len) * b;
           s.C += b * b.transpose();
+          if (s.owners.empty() || s.owners.back().first != condition)
+            s.owners.emplace_back(condition, Mat3::Zero());
+          s.owners.back().second += b * b.transpose();
         } else if (std::abs(missing) > 1e-12 * (1 + std::abs(offset))) {
           throw InputError("boundary conditions on node " + std::to_string(i) +
                            " contradict each other");
@@ -132,11 +144,9 @@ void Constraints::project(BlockSparseMatrix& H) const {
 Eigen::Matrix<double, Eigen::Dynamic, 3> Constraints::reactions(const VectorX& g) const {
   Eigen::Matrix<double, Eigen::Dynamic, 3> R =
       Eigen::Matrix<double, Eigen::Dynamic, 3>::Zero(static_cast<Eigen::Index>(list_.size()), 3);
-  for (size_t k = 0; k < list_.size(); ++k)
-    for (Index i : list_[k].nodes) {
-      const NodeState& s = states_[slot_[i]];
-      R.row(static_cast<Eigen::Index>(k)) += (s.C * g.segment<3>(3 * i)).transpose();
-    }
+  for (const NodeState& s : states_)
+    for (const auto& [condition, C] : s.owners)
+      R.row(condition) += (C * g.segment<3>(3 * s.node)).transpose();
   return R;
 }
 

@@ -60,7 +60,10 @@ class Constraints {
   /// the Newton system restricted to the free directions, identity on the constrained ones.
   void project(BlockSparseMatrix& H) const;
   /// Force each condition exerts on the body [N], #conditions x 3: at equilibrium the supports
-  /// balance the energy gradient g on the constrained directions, so it is sum_i C_i g_i.
+  /// balance the energy gradient g on the constrained directions, so it is sum_i C_i g_i. Every
+  /// constrained direction belongs to exactly one condition (a full prescription owns its
+  /// nodes; a plane or line the directions it added), so the rows sum to sum_i C_i g_i, which
+  /// at equilibrium is minus the applied loads.
   Eigen::Matrix<double, Eigen::Dynamic, 3> reactions(const VectorX& g) const;
 
   const std::vector<Constraint>& list() const { return list_; }
@@ -71,6 +74,7 @@ class Constraints {
     Mat3 C;               // projector onto the constrained directions
     Index full = -1;      // index of the fully prescribing condition, or -1
     Vec3 shift_per_load;  // plane offsets: target = X + lambda shift_per_load
+    std::vector<std::pair<Index, Mat3>> owners;  // (condition, its part of C); parts sum to C
   };
   Vec3 target(const NodeState& s, double lambda) const;
 

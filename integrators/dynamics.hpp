@@ -3,12 +3,7 @@
 /// comparators): implicit Euler and Newmark (implicit_stepper.hpp), symplectic Euler
 /// (symplectic_euler.hpp) and SUNDIALS ARKODE ERKStep (arkode_stepper.hpp).
 
-#include <chrono>
-#include <functional>
-#include <span>
-
 #include "integrators/newton.hpp"
-#include "integrators/nodal_spring.hpp"
 
 namespace depthfem {
 
@@ -39,8 +34,25 @@ struct ArkodeOptions {
   long max_steps = 100000;           ///< internal steps per output interval
 };
 
+/// Newmark's parameters: x^{n+1} = x^n + h v^n + h^2 ((1/2 - beta) a^n + beta a^{n+1}),
+/// v^{n+1} = v^n + h ((1 - gamma) a^n + gamma a^{n+1}). The defaults (average acceleration) are
+/// second order and free of numerical dissipation; 2 beta >= gamma >= 1/2 is unconditionally
+/// stable for linear problems, and gamma > 1/2 damps high frequencies at first order.
+struct NewmarkOptions {
+  double beta = 0.25;
+  double gamma = 0.5;
+};
+
+/// Which mass matrix the inertia of an implicit scheme uses.
+enum class MassMatrix {
+  kLumped,      ///< diagonal, a quarter of each tet's mass per corner
+  kConsistent,  ///< rho V / 20 (1 + delta_ab) per tet corner pair (linear tets)
+};
+
 struct DynamicOptions {
   Integrator integrator = Integrator::kImplicitEuler;
+  MassMatrix mass = MassMatrix::kLumped;  ///< explicit integrators need kLumped
+  NewmarkOptions newmark;
   double time_step = 1e-2;  ///< h [s]; the output interval for ARKODE
   double duration = 1.0;    ///< simulated time [s]; prescribed motions ramp with t / duration
   RayleighDamping damping;
@@ -48,27 +60,10 @@ struct DynamicOptions {
   NewtonOptions newton;
 };
 
-/// One completed time step.
-struct DynamicStep {
-  Index index = 0;
-  double time = 0;  ///< [s]
-  NewtonResult newton;
-  double seconds = 0;
-  const Points* x = nullptr;
-  const Points* v = nullptr;
-  VectorX gradient;             ///< gradient of everything the step balances at x, for reactions
-  double potential_energy = 0;  ///< elastic + external + contact energy at x [J] (no tethers)
-};
-
-using StepCallback = std::function<void(const DynamicStep&)>;
-
-/// Number of steps of size time_step that cover the duration.
+/// Number of steps of size time_step that cover the duration (the last one may be shorter).
 Index time_step_count(const DynamicOptions& options);
 
-/// Completes a step record for (x, v) at time t (gradient of the system at x, the potential
-/// energy without the integrator's `tethers`, wall time since `start`) and passes it to on_step.
-void report_time_step(System& system, std::span<Tether* const> tethers, Index index, double t,
-                      NewtonResult newton, const Points& x, const Points& v,
-                      std::chrono::steady_clock::time_point start, const StepCallback& on_step);
+/// End time of step n (0-based) [s]: (n + 1) time_step, and exactly the duration for the last.
+double step_end_time(const DynamicOptions& options, Index n);
 
 }  // namespace depthfem

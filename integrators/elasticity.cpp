@@ -3,10 +3,13 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
+#include <algorithm>
 #include <functional>
+#include <limits>
 #include <stdexcept>
 
 #include "core/error.hpp"
+#include "integrators/inversion_step.hpp"
 #include "integrators/tet_kernel.hpp"
 
 namespace depthfem {
@@ -132,6 +135,26 @@ double Elasticity::evaluate(const Points& x, VectorX* gradient, BlockSparseMatri
         grp.material);
   }
   return total;
+}
+
+double Elasticity::max_step(const Points& x, const Points& dx) const {
+  constexpr double kLimit = 2.0;
+  double alpha = std::numeric_limits<double>::infinity();
+  for (const Group& grp : groups_) {
+    const TetBlock& b = grp.block;
+    alpha = std::min(alpha, tbb::parallel_reduce(
+                                tbb::blocked_range<Index>(0, b.size(), 1024), alpha,
+                                [&](const tbb::blocked_range<Index>& r, double acc) {
+                                  for (Index e = r.begin(); e < r.end(); ++e) {
+                                    acc = std::min(
+                                        acc, inversion_step(edge_matrix(x, b.nodes, e),
+                                                            edge_matrix(dx, b.nodes, e), kLimit));
+                                  }
+                                  return acc;
+                                },
+                                [](double a, double c) { return std::min(a, c); }));
+  }
+  return alpha;
 }
 
 Index Elasticity::first_inverted(const Points& x) const {

@@ -30,6 +30,10 @@ class Elasticity final : public ForceModule {
   void bind(const BlockSparseMatrix& hessian) override;
   double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
 
+  /// Largest a such that every tet keeps det F > 0 along x + a dx, looked for up to a = 2 (a
+  /// Newton step is at most 1); +infinity beyond.
+  double max_step(const Points& x, const Points& dx) const override;
+
   /// Global id of the first tet (in group order) with det F <= 0 at x, or -1 if none.
   Index first_inverted(const Points& x) const;
 

@@ -3,9 +3,10 @@
 namespace depthfem {
 
 double Gravity::evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix*) const {
+  const Vec3 g = scale_ * g_;
   if (gradient)
-    for (Index i = 0; i < x.rows(); ++i) gradient->segment<3>(3 * i) -= mass_(i) * g_;
-  return -(mass_.transpose() * (x * g_)).value();
+    for (Index i = 0; i < x.rows(); ++i) gradient->segment<3>(3 * i) -= mass_(i) * g;
+  return -(mass_.transpose() * (x * g)).value();
 }
 
 }  // namespace depthfem

@@ -1,12 +1,21 @@
 #include "integrators/newton.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace depthfem {
 
+namespace {
+// Fraction of the largest legal step the line search starts from (the energy barrier is
+// infinite at the step itself).
+constexpr double kMaxStepFraction = 0.9;
+}  // namespace
+
 bool NewtonSolver::line_search(Points& x, const Points& step, double energy, double residual) {
   VectorX g_trial;
-  double alpha = 1.0;
+  // Start below the first step length at which some module turns illegal (an element would
+  // invert): the energy is infinite there, and halving from 1 would waste trials on it.
+  double alpha = std::min(1.0, kMaxStepFraction * system_.max_step(x, step));
   for (int k = 0; k <= options_.max_line_search; ++k, alpha *= 0.5) {
     const Points trial = x + alpha * step;
     system_.prepare(trial);

@@ -37,8 +37,9 @@ struct NewtonResult {
 };
 
 /// Minimises the energy of a System over the free directions of its Constraints.
-/// Each step solves (P H P + C) dx = -P g, then halves the step until the configuration is legal
-/// (finite energy) and the line-search rule holds (the paper's damping factor). The paper asks
+/// Each step solves (P H P + C) dx = -P g, then halves the step, starting from 1 or 0.9 of the
+/// System's max_step (whichever is smaller), until the configuration is legal (finite energy) and
+/// the line-search rule holds (the paper's damping factor). The paper asks
 /// for a lower residual; in bending that rejects good Newton steps (a linearised rotation
 /// stretches fibers, so the full step raises the residual while it lowers the energy, and Newton
 /// crawls), so the default asks for a lower energy. Where the Newton direction is not a descent

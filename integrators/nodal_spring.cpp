@@ -19,7 +19,11 @@ double NodalSpring::evaluate(const Points& x, VectorX* gradient, BlockSparseMatr
   if (hessian)
     for (Index i = 0; i < x.rows(); ++i)
       hessian->block(diagonal_[i]).diagonal().array() += scale_ * k_(i);
-  return 0.5 * scale_ * (k_.array() * d.rowwise().squaredNorm().array()).sum();
+  return scale_ * quadratic_form(d);
+}
+
+double NodalSpring::quadratic_form(const Points& d) const {
+  return 0.5 * (k_.array() * d.rowwise().squaredNorm().array()).sum();
 }
 
 VectorX quasi_viscosity_stiffness(const Points& X, const TetIndices& tets, double viscosity) {

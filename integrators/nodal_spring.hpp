@@ -13,6 +13,9 @@ class Tether : public ForceModule {
   void set_anchor(const Points& anchor) { anchor_ = anchor; }
   /// Sets the scale s (e.g. 1 / h^2 for a new time step).
   void set_scale(double factor) { scale_ = factor; }
+  /// 1/2 d^T K d for #nodes x 3 displacements d, without scale or anchor (with K = M and d = v:
+  /// the kinetic energy).
+  virtual double quadratic_form(const Points& d) const = 0;
 
  protected:
   double scale_ = 1.0;
@@ -31,6 +34,7 @@ class NodalSpring final : public Tether {
   void add_couplings(SparsityBuilder&) const override {}
   void bind(const BlockSparseMatrix& hessian) override;
   double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
+  double quadratic_form(const Points& d) const override;
 
   const VectorX& stiffness() const { return k_; }
 

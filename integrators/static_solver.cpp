@@ -1,41 +1,37 @@
 #include "integrators/static_solver.hpp"
 
-#include <chrono>
 #include <cmath>
 
 #include "core/error.hpp"
 
 namespace depthfem {
 
-namespace {
-double seconds_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-}  // namespace
-
-void StaticSolver::run(Points& x, const std::function<void(const StaticStep&)>& on_step) {
+void StaticSolver::run(Points& x) {
+  const Constraints& constraints = lifecycle_.constraints();
+  System& system = lifecycle_.system();
   // Converged solutions at the last two load factors feed the predictor.
   double load = 0, previous_load = 0;
   Points previous = x;
   double increment = std::min(options_.initial_increment, options_.max_increment);
-  int successes = 0;
-  Index index = 0;
-  auto start = std::chrono::steady_clock::now();
+  // Load factors are base + k increment within a run of equal increments, so that ten steps of
+  // 0.1 end exactly at 1 instead of accumulating round-off.
+  double base = 0;
+  int count = 0, successes = 0;
   std::string last_failure;
 
   const auto attempt = [&](double target, bool settling) -> bool {
     Points trial = x;
-    if (options_.predictor && index >= 1 && !settling && load > previous_load) {
+    if (options_.predictor && lifecycle_.completed() >= 1 && !settling && load > previous_load) {
       trial = x + (target - load) / (load - previous_load) * (x - previous);
     }
-    constraints_.impose(target, trial);
+    constraints.impose(target, trial);
     if (viscosity_) viscosity_->set_anchor(x);
-    system_.begin_step(x, target);
-    system_.prepare(trial);
-    if (!std::isfinite(system_.energy(trial))) {  // predictor (or boundary motion) inverted a tet
+    lifecycle_.begin(x, target);
+    system.prepare(trial);
+    if (!std::isfinite(system.energy(trial))) {  // predictor (or boundary motion) inverted a tet
       trial = x;
-      constraints_.impose(target, trial);
-      if (!std::isfinite(system_.energy(trial))) {
+      constraints.impose(target, trial);
+      if (!std::isfinite(system.energy(trial))) {
         last_failure = "prescribed motion inverts an element";
         return false;
       }
@@ -49,28 +45,26 @@ void StaticSolver::run(Points& x, const std::function<void(const StaticStep&)>& 
     previous_load = load;
     x = trial;
     load = target;
-    StaticStep step;
-    step.index = index++;
-    step.load = load;
-    step.settling = settling;
-    step.newton = std::move(r);
-    step.seconds = seconds_since(start);
-    step.x = &x;
-    system_.gradient(x, step.gradient);
-    on_step(step);
-    start = std::chrono::steady_clock::now();
+    lifecycle_.complete(load, r, x, nullptr, settling);
     return true;
+  };
+  const auto restart_run = [&](double new_increment) {
+    increment = new_increment;
+    base = load;
+    count = 0;
   };
 
   while (load < 1.0) {
-    const double target = std::min(1.0, load + increment);
+    double target = base + (count + 1) * increment;
+    if (target > 1.0 || 1.0 - target <= 1e-9 * increment) target = 1.0;
     if (attempt(target, false)) {
-      if (++successes >= 2)
-        increment = std::min(options_.max_increment, increment * options_.growth);
+      ++count;
+      if (++successes >= 2 && increment < options_.max_increment)
+        restart_run(std::min(options_.max_increment, increment * options_.growth));
       continue;
     }
     successes = 0;
-    increment *= 0.5;
+    restart_run(increment * 0.5);
     if (increment < options_.min_increment) {
       throw SolveError("load increment fell below min_increment " +
                        std::to_string(options_.min_increment) + " at load factor " +
@@ -96,7 +90,7 @@ void StaticSolver::run(Points& x, const std::function<void(const StaticStep&)>& 
     viscosity_->set_scale(1.0);
     viscosity_->set_anchor(before);
     viscosity_->evaluate(x, &viscous, nullptr);
-    constraints_.project(viscous);
+    constraints.project(viscous);
     if (viscous.norm() <= options_.newton.tolerance) return;
     scale = std::max(scale / 2, 1e-12);
   }

@@ -2,10 +2,9 @@
 /// Static analysis: adaptive incremental loading with a two-point predictor around Newton
 /// (LOOP1 of the paper's section 3.2), and quasi-viscous settling.
 
-#include <functional>
-
 #include "integrators/newton.hpp"
 #include "integrators/nodal_spring.hpp"
+#include "integrators/step_lifecycle.hpp"
 
 namespace depthfem {
 
@@ -21,37 +20,24 @@ struct StaticOptions {
   NewtonOptions newton;
 };
 
-/// One completed load step as reported to the caller.
-struct StaticStep {
-  Index index = 0;
-  double load = 0;        ///< load factor in (0, 1]
-  bool settling = false;  ///< a quasi-viscous step at full load
-  NewtonResult newton;
-  double seconds = 0;  ///< wall time of the step, failed attempts included
-  const Points* x = nullptr;
-  VectorX gradient;  ///< unprojected energy gradient at x (for reactions)
-};
-
 /// Drives a System from the reference state to load factor 1 (and to rest, with quasi-viscosity).
 class StaticSolver {
  public:
-  /// `viscosity` is the quasi-viscosity module inside `system`, or null.
-  StaticSolver(System& system, const Constraints& constraints, NodalSpring* viscosity,
-               StaticOptions options)
-      : system_(system),
-        constraints_(constraints),
+  /// `viscosity` is the quasi-viscosity module inside the lifecycle's System, or null.
+  StaticSolver(StepLifecycle& lifecycle, NodalSpring* viscosity, StaticOptions options)
+      : lifecycle_(lifecycle),
         viscosity_(viscosity),
         options_(options),
-        newton_(system, constraints, options.newton) {}
+        newton_(lifecycle.system(), lifecycle.constraints(), options.newton) {}
 
-  /// Runs from x; calls `on_step` after every completed step. Throws SolveError when the
-  /// increment falls below the minimum or settling does not finish; the steps reported so far
-  /// stay valid (x holds the last completed one).
-  void run(Points& x, const std::function<void(const StaticStep&)>& on_step);
+  /// Runs from x, completing every converged increment through the lifecycle. Load factors are
+  /// the start of the current run of equal increments plus a whole number of them, and the last
+  /// one is exactly 1. Throws SolveError when the increment falls below the minimum or settling
+  /// does not finish; the steps completed so far stay valid (x holds the last one).
+  void run(Points& x);
 
  private:
-  System& system_;
-  const Constraints& constraints_;
+  StepLifecycle& lifecycle_;
   NodalSpring* viscosity_;
   StaticOptions options_;
   NewtonSolver newton_;

@@ -14,12 +14,16 @@ class StiffnessTether final : public Tether {
   StiffnessTether(std::string name, const ForceModule& elastic, double beta)
       : name_(std::move(name)), elastic_(elastic), beta_(beta) {}
   std::string name() const override { return name_; }
-  void begin_step(const Points& x, double load) override;
+  void begin_step(const Points& x) override;
   void add_couplings(SparsityBuilder&) const override {}  // those of the elastic module
   void bind(const BlockSparseMatrix& hessian) override;
   double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
+  double quadratic_form(const Points& d) const override;
 
  private:
+  /// Assembles K at the start configuration when begin_step() or bind() made it stale.
+  void refresh() const;
+
   std::string name_;
   const ForceModule& elastic_;
   double beta_;   // [s]

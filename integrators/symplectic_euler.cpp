@@ -30,9 +30,9 @@ double critical_time_step(const Points& X, const TetIndices& tets, const VectorX
   return h;
 }
 
-SymplecticEuler::SymplecticEuler(System& system, const Constraints& constraints, VectorX mass,
-                                 DynamicOptions options, double critical_step)
-    : system_(system), constraints_(constraints), mass_(std::move(mass)), options_(options) {
+SymplecticEuler::SymplecticEuler(StepLifecycle& lifecycle, VectorX mass, DynamicOptions options,
+                                 double critical_step)
+    : lifecycle_(lifecycle), mass_(std::move(mass)), options_(options) {
   if (options_.time_step > critical_step) {
     throw InputError("symplectic_euler: time step " + std::to_string(options_.time_step) +
                      " s exceeds the stable limit " + std::to_string(critical_step) +
@@ -42,17 +42,18 @@ SymplecticEuler::SymplecticEuler(System& system, const Constraints& constraints,
     throw InputError(
         "symplectic_euler: stiffness-proportional damping needs an implicit integrator");
   }
+  if (options_.mass != MassMatrix::kLumped)
+    throw InputError("symplectic_euler: a consistent mass matrix needs an implicit integrator");
 }
 
-void SymplecticEuler::run(Points& x, Points& v, const StepCallback& on_step) {
-  const double h = options_.time_step;
+void SymplecticEuler::run(Points& x, Points& v) {
+  const Constraints& constraints = lifecycle_.constraints();
   const Index steps = time_step_count(options_);
   VectorX g;
+  lifecycle_.begin(x, 0.0);
+  double energy = lifecycle_.gradient(x, g), t = 0;
   for (Index n = 0; n < steps; ++n) {
-    const auto start = std::chrono::steady_clock::now();
-    const double t = (n + 1) * h;
-    system_.prepare(x);
-    const double energy = system_.gradient(x, g);
+    const double t_next = step_end_time(options_, n), h = t_next - t;
     if (!std::isfinite(energy)) {
       throw SolveError("time step " + std::to_string(n) + " (t = " + std::to_string(t) +
                        " s): an element inverted (the explicit step is too large for this motion)");
@@ -62,13 +63,18 @@ void SymplecticEuler::run(Points& x, Points& v, const StepCallback& on_step) {
       v.row(i) -= (h / mass_(i)) * g.segment<3>(3 * i).transpose();
     const Points before = x;
     x += h * v;
-    constraints_.impose(t / options_.duration, x);
-    v = (x - before) / h;        // constrained nodes move as prescribed
-    NewtonResult explicit_step;  // no solve: converged by construction, energy at the start
+    constraints.impose(t_next / options_.duration, x);
+    v = (x - before) / h;  // constrained nodes move as prescribed
+    t = t_next;
+    lifecycle_.set_load(t / options_.duration);
+    NewtonResult explicit_step;  // no solve
     explicit_step.converged = true;
-    explicit_step.energy = energy;
     explicit_step.residuals.push_back(0.0);
-    report_time_step(system_, {}, n, t, std::move(explicit_step), x, v, start, on_step);
+    lifecycle_.complete(t, explicit_step, x, &v);
+    if (n + 1 == steps) break;
+    lifecycle_.begin(x, t / options_.duration);
+    g = lifecycle_.last_gradient();
+    energy = lifecycle_.last_energy();
   }
 }
 

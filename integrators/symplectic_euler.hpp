@@ -4,12 +4,9 @@
 ///   v^{n+1} = v^n - h (M^-1 grad E(x^n) + alpha v^n),  x^{n+1} = x^n + h v^{n+1},
 /// stable only below the critical time step of the mesh, which is estimated and enforced.
 
-#include <functional>
-
-#include "integrators/constraints.hpp"
 #include "integrators/dynamics.hpp"
 #include "integrators/elasticity.hpp"
-#include "integrators/system.hpp"
+#include "integrators/step_lifecycle.hpp"
 
 namespace depthfem {
 
@@ -19,20 +16,21 @@ namespace depthfem {
 double critical_time_step(const Points& X, const TetIndices& tets, const VectorX& tet_density,
                           const std::vector<ElasticGroup>& groups);
 
-/// Symplectic Euler over a System (its modules must not include inertia).
+/// Symplectic Euler over the System of a lifecycle (its modules must not include inertia).
 class SymplecticEuler {
  public:
-  /// Throws InputError when options.time_step exceeds `critical_step` or stiffness-proportional
-  /// damping is requested.
-  SymplecticEuler(System& system, const Constraints& constraints, VectorX mass,
-                  DynamicOptions options, double critical_step);
+  /// Throws InputError when options.time_step exceeds `critical_step`, or stiffness-proportional
+  /// damping or a consistent mass is requested.
+  SymplecticEuler(StepLifecycle& lifecycle, VectorX mass, DynamicOptions options,
+                  double critical_step);
 
-  /// Advances (x, v) to the end time; calls on_step after every step (newton fields left empty).
-  void run(Points& x, Points& v, const StepCallback& on_step);
+  /// Advances (x, v) to the end time, completing every step through the lifecycle (no Newton
+  /// iterations). Forces of step n are those at (x^n, t^n); the gradient computed to report a
+  /// step is the next step's force, so each step evaluates the forces once.
+  void run(Points& x, Points& v);
 
  private:
-  System& system_;
-  const Constraints& constraints_;
+  StepLifecycle& lifecycle_;
   VectorX mass_;
   DynamicOptions options_;
 };

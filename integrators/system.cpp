@@ -1,14 +1,33 @@
 #include "integrators/system.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace depthfem {
 
-void System::begin_step(const Points& x, double load) {
+void System::begin_step(const Points& x) {
   for (const auto& m : modules_) {
     PhaseTimers::Scope t(timers_, "collision detection: " + m->name());
-    m->begin_step(x, load);
+    m->begin_step(x);
   }
+}
+
+void System::set_load(double load) {
+  for (const auto& m : modules_) m->set_load(load);
+}
+
+double System::max_step(const Points& x, const Points& dx) const {
+  double alpha = std::numeric_limits<double>::infinity();
+  for (const auto& m : modules_) {
+    PhaseTimers::Scope t(timers_, "force/stiffness: " + m->name());
+    alpha = std::min(alpha, m->max_step(x, dx));
+  }
+  return alpha;
+}
+
+void System::report(const Points& x, StepRecord& step) const {
+  for (const auto& m : modules_) m->report(x, step);
 }
 
 void System::prepare(const Points& x) {

@@ -29,8 +29,10 @@ class System {
   const std::vector<std::unique_ptr<ForceModule>>& modules() const { return modules_; }
   PhaseTimers& timers() { return timers_; }
 
-  /// Calls every module's begin_step(x, load).
-  void begin_step(const Points& x, double load);
+  /// Calls every module's begin_step(x).
+  void begin_step(const Points& x);
+  /// Calls every module's set_load(load).
+  void set_load(double load);
   /// Calls every module's prepare(x); a module whose couplings changed invalidates the pattern.
   void prepare(const Points& x);
   /// Total energy; +infinity when some module finds x illegal.
@@ -40,6 +42,10 @@ class System {
   /// Total energy, gradient and Hessian (overwritten; read it with matrix()). The pattern is
   /// (re)built on first use or after `invalidate_pattern()`.
   double hessian(const Points& x, VectorX& g);
+  /// Smallest max_step(x, dx) over the modules (+infinity when none limits the step).
+  double max_step(const Points& x, const Points& dx) const;
+  /// Lets every module add to the record of a converged step at x (after prepare(x)).
+  void report(const Points& x, StepRecord& step) const;
   /// The Hessian filled by the last hessian() call.
   BlockSparseMatrix& matrix() { return hessian_; }
   /// Forces a rebuild of the Hessian pattern (a module's couplings changed).

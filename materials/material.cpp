@@ -40,6 +40,15 @@ NeoHookean NeoHookean::from_youngs(double E, double nu) {
   return {E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))};
 }
 
+MooneyRivlin MooneyRivlin::from_youngs(double E, double nu, double C2) {
+  require(E > 0, "mooney_rivlin: Young's modulus must be > 0");
+  require(nu > -1 && nu < 0.5, "mooney_rivlin: Poisson's ratio must be in (-1, 0.5)");
+  const double mu = E / (2 * (1 + nu)), lambda = E * nu / ((1 + nu) * (1 - 2 * nu));
+  require(C2 >= 0 && C2 <= mu / 2,
+          "mooney_rivlin: C2 must be in [0, mu / 2] = [0, E / (4 (1 + nu))]");
+  return {mu / 2 - C2, C2, lambda / 4 - C2};
+}
+
 void MooneyRivlin::validate() const {
   require(C1 >= 0 && C2 >= 0, "mooney_rivlin: C1 and C2 must be >= 0");
   require(C1 + C2 > 0, "mooney_rivlin: C1 + C2 must be > 0");

@@ -19,6 +19,13 @@ struct MooneyRivlin {
   static constexpr bool kUsesFiber = false;
   static constexpr const char* kName = "mooney_rivlin";
 
+  /// The material with small-strain Young's modulus E and Poisson's ratio nu for a given C2:
+  /// linearised at F = I, mu = 2 (C1 + C2) and lambda = 4 (a + C2) (the second derivative of psi
+  /// along J^(1/3) I is the bulk modulus 4/3 C1 + 16/3 C2 + 4 a), so C1 = mu / 2 - C2 and
+  /// a = lambda / 4 - C2. Throws std::invalid_argument for E <= 0, nu outside (-1, 0.5), or C2
+  /// outside [0, mu / 2].
+  static MooneyRivlin from_youngs(double E, double nu, double C2 = 0);
+
   /// Throws std::invalid_argument unless C1, C2 >= 0, C1 + C2 > 0 and the rest state is stable.
   void validate() const;
 

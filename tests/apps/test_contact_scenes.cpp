@@ -12,6 +12,7 @@
 namespace depthfem {
 namespace {
 
+using testing::interface;
 using testing::load;
 using testing::run;
 
@@ -41,8 +42,9 @@ TEST(ContactScenes, BallFallsOntoTheFloorInAStaticRun) {
   const RunResult r = run(s);
   ASSERT_TRUE(r.success) << r.message;
   const double weight = lumped_mass(s.mesh.X, s.mesh.tets, s.tet_density).sum() * 9.81;
-  ASSERT_TRUE(r.steps.back().contact_force.has_value());
-  EXPECT_NEAR(*r.steps.back().contact_force, weight, 0.01 * weight);
+  const InterfaceForce& floor = interface(r.steps.back(), "obstacle floor");
+  EXPECT_NEAR(floor.force.z(), weight, 0.01 * weight);
+  EXPECT_LT(floor.force.head<2>().norm(), 1e-3 * weight) << "a level floor pushes straight up";
   const double lowest = r.x.col(2).minCoeff();
   EXPECT_LT(lowest, 0.0);
   EXPECT_GT(lowest, -0.005) << "penetration beyond 5 % of the radius";
@@ -68,8 +70,7 @@ TEST(ContactScenes, SlidingBlockConvergesAtEveryStep) {
 // deformable block: its nodes follow the prescribed motion exactly, and the block's base carries
 // the contact force.
 TEST(ContactScenes, RigidBodyWithPrescribedMotionPressesADeformableBlock) {
-  const std::string path =
-      (std::filesystem::temp_directory_path() / "depthfem_rigid_press.json").string();
+  const std::string path = testing::temp_path("rigid_press.json");
   std::ofstream(path) << R"({
     "bodies": [
       {"name": "block", "mesh": {"generator": "box", "lo": [0, 0, 0], "hi": [1, 1, 0.3], "cells": [5, 5, 3]},
@@ -97,7 +98,15 @@ TEST(ContactScenes, RigidBodyWithPrescribedMotionPressesADeformableBlock) {
   const auto& R = r.steps.back().reactions;
   EXPECT_GT(R(1, 2), 0);
   EXPECT_NEAR(R(1, 2) + R(2, 2), 0.0, 1e-6 * R(1, 2));
-  EXPECT_GT(*r.steps.back().contact_area, 0.1);
+  // The contact row carries the same force: down on the block, balanced by its base. Its
+  // magnitude adds the sideways pushes on the stamp's walls; the pressed area is at most the
+  // stamp's surface below the block's top: its footprint and its walls 3 cm deep.
+  const InterfaceForce& press = interface(r.steps.back(), "block/stamp");
+  EXPECT_NEAR(press.force.z(), -R(1, 2), 1e-6 * R(1, 2));
+  EXPECT_GE(press.magnitude, press.force.norm());
+  EXPECT_LT(press.magnitude, 1.05 * press.force.norm());
+  EXPECT_GT(press.area, 0.0);
+  EXPECT_LT(press.area, 0.34 * 0.40 + 2 * (0.34 + 0.40) * 0.03);
 }
 
 // Hertz: force of a rigid sphere (radius R) pressed a depth d into an elastic half-space,
@@ -107,13 +116,13 @@ double hertz_force(double youngs, double poisson, double radius, double depth) {
 }
 
 // Vertical force on the whole block (four quarters): what the held far face carries.
-double hertz_scene_force(const StepSummary& step) {
+double hertz_scene_force(const StepRecord& step) {
   return -4 * step.reactions(2, 2);
 }  // rows x0, y0, support
 
 // The sphere of hertz_sphere moves 0.05 m at full load; E = 100 kPa, nu = 0.3, R = 1 m.
 constexpr double kHertzTravel = 0.05;
-double hertz_scene_error(const StepSummary& step) {
+double hertz_scene_error(const StepRecord& step) {
   const double d = step.load * kHertzTravel;
   return hertz_scene_force(step) / hertz_force(1e5, 0.3, 1.0, d) - 1;
 }
@@ -132,7 +141,7 @@ TEST(ContactScenes, HertzSphereForceWithinFivePercentOfHertz) {
   ASSERT_TRUE(r.success) << r.message;
   ASSERT_NEAR(r.steps.back().load, 1.0, 1e-12);
   ASSERT_GE(r.steps.size(), 5u);
-  for (const StepSummary& step : r.steps)
+  for (const StepRecord& step : r.steps)
     EXPECT_LT(std::abs(hertz_scene_error(step)), 0.05) << "d/R = " << step.load * kHertzTravel;
 }
 
@@ -193,9 +202,8 @@ TEST(ContactScenes, FoldedSlabRestsOnItselfBySelfContact) {
   }
   EXPECT_GT(compared, 40) << "the upper half must lie over the lower one";
   EXPECT_LT(deepest, 0.05 * thickness);
-  const StepSummary& last = r.steps.back();
-  const double self_contact = *last.contact_force - last.reactions.colwise().sum().norm();
-  EXPECT_GT(self_contact, 1.0) << "self-contact carries no force";
+  const StepRecord& last = r.steps.back();
+  EXPECT_GT(interface(last, "slab (self)").magnitude, 1.0) << "self-contact carries no force";
 }
 
 }  // namespace

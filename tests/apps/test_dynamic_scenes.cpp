@@ -22,11 +22,12 @@ using testing::run;
 
 // With gravity only, every node moves alike and elastic forces vanish. Implicit Euler and
 // symplectic Euler (velocity first) both give v_n = v_0 + n h g and
-// x_n = x_0 + n h v_0 + h^2 g n (n + 1) / 2 exactly; Newmark (exact for constant acceleration)
-// and ARKODE's Runge-Kutta (exact for quadratic solutions) give x_0 + t v_0 + g t^2 / 2.
+// x_n = x_0 + n h v_0 + h^2 g n (n + 1) / 2 exactly; Newmark (exact for constant acceleration,
+// whatever beta and gamma) and ARKODE's Runge-Kutta (exact for quadratic solutions) give
+// x_0 + t v_0 + g t^2 / 2. With the consistent mass matrix, whose rows sum to the lumped masses
+// that carry gravity, the uniform acceleration g still balances the weight exactly.
 TEST(DynamicScenes, FreeFallFollowsTheDiscreteSolutionOfEachIntegrator) {
-  const std::string path =
-      (std::filesystem::temp_directory_path() / "depthfem_free_fall.json").string();
+  const std::string path = testing::temp_path("free_fall.json");
   std::ofstream(path) << R"({
     "analysis": "dynamic", "gravity": [0, 0, -9.81],
     "bodies": [{"name": "b", "mesh": {"generator": "box", "lo": [0, 0, 0], "hi": [0.3, 0.2, 0.1], "cells": [3, 2, 1]},
@@ -38,12 +39,19 @@ TEST(DynamicScenes, FreeFallFollowsTheDiscreteSolutionOfEachIntegrator) {
   const Vec3 v0(1, 0, 2), g(0, 0, -9.81);
   const Vec3 first_order = t * v0 + h * h * g * n * (n + 1) / 2;
   const Vec3 exact = t * v0 + 0.5 * t * t * g;
-  for (const auto& [integrator, expected] : {std::pair{"implicit_euler", first_order},
-                                             {"symplectic_euler", first_order},
-                                             {"newmark", exact},
-                                             {"arkode", exact}}) {
+  // Each case: the scene's "dynamic" section beyond time_step and duration.
+  const std::pair<const char*, Vec3> cases[] = {
+      {R"("integrator": "implicit_euler")", first_order},
+      {R"("integrator": "symplectic_euler")", first_order},
+      {R"("integrator": "newmark")", exact},
+      {R"("integrator": "arkode")", exact},
+      {R"("integrator": "newmark", "newmark": {"beta": 0.3, "gamma": 0.6})", exact},
+      {R"("integrator": "newmark", "mass": "consistent")", exact},
+      {R"("integrator": "implicit_euler", "mass": "consistent")", first_order}};
+  for (const auto& [integrator, expected] : cases) {
     const Scene s =
-        load_scene(path, {parse_override(std::string("dynamic.integrator=") + integrator)});
+        load_scene(path, {parse_override(R"(dynamic={"time_step": 0.0002, "duration": 0.002, )" +
+                                         std::string(integrator) + "}")});
     const RunResult r = run(s);
     ASSERT_TRUE(r.success) << r.message;
     ASSERT_EQ(r.steps.size(), 10u);
@@ -57,8 +65,7 @@ TEST(DynamicScenes, FreeFallFollowsTheDiscreteSolutionOfEachIntegrator) {
 // Prescribed motion holds exactly at every step of every integrator: the face x = 0 of a falling
 // box is displaced linearly in time (u t / duration) while the rest moves freely.
 TEST(DynamicScenes, EveryIntegratorHonoursDirichletConditionsExactly) {
-  const std::string path =
-      (std::filesystem::temp_directory_path() / "depthfem_prescribed.json").string();
+  const std::string path = testing::temp_path("prescribed.json");
   std::ofstream(path) << R"({
     "analysis": "dynamic", "gravity": [0, 0, -9.81],
     "bodies": [{"name": "b", "mesh": {"generator": "box", "lo": [0, 0, 0], "hi": [0.3, 0.2, 0.1], "cells": [3, 2, 1]},
@@ -73,7 +80,7 @@ TEST(DynamicScenes, EveryIntegratorHonoursDirichletConditionsExactly) {
     const std::vector<Index>& face = s.constraints[0].nodes;
     double worst = 0, free_motion = 0;
     RunOptions options;
-    options.observer = [&](const StepSummary& st, const Points& x) {
+    options.observer = [&](const StepRecord& st, const Points& x) {
       const Vec3 u = Vec3(0.01, 0.02, 0.03) * (st.load / 0.002);
       for (Index i : face)
         worst = std::max(worst, (x.row(i) - s.mesh.X.row(i) - u.transpose()).norm());
@@ -108,8 +115,8 @@ TEST(DynamicScenes, SymplecticEulerRefusesUnstableStepsAndKeepsEnergyBounded) {
   const VectorX m = lumped_mass(s.mesh.X, s.mesh.tets, s.tet_density);
   const double initial = -(m.transpose() * (s.mesh.X * s.gravity)).value();
   double deviation = 0, kinetic = 0;
-  for (const StepSummary& st : r.steps) {
-    deviation = std::max(deviation, std::abs(st.kinetic_energy + st.potential_energy - initial));
+  for (const StepRecord& st : r.steps) {
+    deviation = std::max(deviation, std::abs(st.kinetic_energy + st.energy - initial));
     kinetic = std::max(kinetic, st.kinetic_energy);
   }
   EXPECT_GT(kinetic, 1.0);
@@ -128,7 +135,7 @@ TEST(DynamicScenes, ImplicitEulerEnergyDecreasesMonotonically) {
   double previous = -(m.transpose() * (s.mesh.X * s.gravity)).value();
   const double initial = previous;
   for (size_t k = 0; k < r.steps.size(); ++k) {
-    const double e = r.steps[k].kinetic_energy + r.steps[k].potential_energy;
+    const double e = r.steps[k].kinetic_energy + r.steps[k].energy;
     EXPECT_LE(e, previous + 1e-9 * std::abs(previous)) << "step " << k;
     previous = e;
   }
@@ -150,9 +157,9 @@ TEST(DynamicScenes, NewmarkKeepsTheEnergyImplicitEulerDissipates) {
     const VectorX m = lumped_mass(s.mesh.X, s.mesh.tets, s.tet_density);
     const double initial = -(m.transpose() * (s.mesh.X * s.gravity)).value();
     double kinetic = 0;
-    for (const StepSummary& st : r.steps) {
+    for (const StepRecord& st : r.steps) {
       kinetic = std::max(kinetic, st.kinetic_energy);
-      lost[k] = std::max(lost[k], std::abs(st.kinetic_energy + st.potential_energy - initial));
+      lost[k] = std::max(lost[k], std::abs(st.kinetic_energy + st.energy - initial));
     }
     lost[k] /= kinetic;
   }
@@ -205,8 +212,7 @@ TEST(DynamicScenes, ClampedBarVibratesAtTheBeamTheoryPeriod) {
   const double E = 1e8, rho = 1000, H = 0.1, L = 1.0;
   const double beam =
       2 * std::numbers::pi / (1.8751 * 1.8751 * std::sqrt(E * H * H / (12 * rho * std::pow(L, 4))));
-  const std::string out =
-      (std::filesystem::temp_directory_path() / "depthfem_vibration.h5").string();
+  const std::string out = testing::temp_path("vibration.h5");
   double error[2];
   for (int k = 0; k < 2; ++k) {
     const Scene s =
@@ -257,9 +263,9 @@ TEST(DynamicScenes, BarsDropOntoTheFloorAndOntoEachOther) {
   double lowest = std::numeric_limits<double>::infinity(), rise = 0, previous = 0;
   bool first = true;
   RunOptions options;
-  options.observer = [&](const StepSummary& st, const Points& x) {
+  options.observer = [&](const StepRecord& st, const Points& x) {
     lowest = std::min(lowest, x.col(2).minCoeff());
-    const double e = st.kinetic_energy + st.potential_energy;
+    const double e = st.kinetic_energy + st.energy;
     if (!first) rise = std::max(rise, e - previous);
     previous = e;
     first = false;

@@ -4,6 +4,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include <unistd.h>
+
 #include "apps/scene.hpp"
 #include "core/error.hpp"
 
@@ -12,7 +14,9 @@ namespace {
 
 class SceneFileTest : public ::testing::Test {
  protected:
-  std::filesystem::path dir = std::filesystem::temp_directory_path() / "depthfem_scene_test";
+  // One folder per test process: ctest runs the tests of this suite in parallel processes.
+  std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("depthfem_scene_test_" + std::to_string(getpid()));
   void SetUp() override { std::filesystem::create_directories(dir); }
   void TearDown() override { std::filesystem::remove_all(dir); }
 
@@ -123,6 +127,35 @@ TEST_F(SceneFileTest, TimeIntegrationSettingsAreChecked) {
   EXPECT_NE(error(kValid, {parse_override("analysis=dynamic")})
                 .find("dynamic: missing required key for a dynamic analysis"),
             std::string::npos);
+  EXPECT_NE(error(kValid, set("dynamic", R"({"time_step": 1, "duration": 1,
+                                             "newmark": {"beta": 0.25}})"))
+                .find("dynamic.newmark: only for \"integrator\": \"newmark\""),
+            std::string::npos);
+  EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "newmark", "time_step": 1, "duration": 1,
+                                             "newmark": {"beta": 0.7}})"))
+                .find("dynamic.newmark.beta: must be in (0, 0.5]"),
+            std::string::npos);
+  EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "newmark", "time_step": 1, "duration": 1,
+                                             "newmark": {"gamma": 0.4}})"))
+                .find("dynamic.newmark.gamma: must be in [0.5, 1]"),
+            std::string::npos);
+  EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "arkode", "time_step": 1, "duration": 1,
+                                             "mass": "consistent"})"))
+                .find("dynamic.mass: a consistent mass matrix needs an implicit integrator"),
+            std::string::npos);
+}
+
+TEST_F(SceneFileTest, MooneyRivlinTakesYoungsModulusAndPoissonsRatio) {
+  const std::string mr = R"({"model": "mooney_rivlin", "youngs": 3e4, "poisson": 0.45, "C2": 1e3})";
+  const Scene s = load_scene(write(kValid), {parse_override("bodies.0.material=" + mr)});
+  const auto& m = std::get<MooneyRivlin>(s.groups.at(0).material);
+  EXPECT_NEAR(2 * (m.C1 + m.C2), 3e4 / 2.9, 1e-9);  // mu = E / (2 (1 + nu))
+  EXPECT_EQ(m.C2, 1e3);
+  EXPECT_NE(
+      error(kValid, {parse_override(R"(bodies.0.material={"model": "mooney_rivlin",
+                                             "youngs": 3e4, "poisson": 0.5})")})
+          .find("bodies[0].material.youngs: mooney_rivlin: Poisson's ratio must be in (-1, 0.5)"),
+      std::string::npos);
 }
 
 TEST_F(SceneFileTest, OverridesReachNestedKeys) {

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <numbers>
 #include <set>
 
@@ -146,8 +147,7 @@ TEST(StaticScenes, BucklingColumnLeavesTheStraightBranch) {
 // A load that cannot be reached (shortening the unit block by 1.5) stops with a clear error once
 // the increment falls below its minimum; the completed increments stay readable in the file.
 TEST(StaticScenes, FailedRunKeepsCompletedIncrements) {
-  const std::string out =
-      (std::filesystem::temp_directory_path() / "depthfem_failed_run.h5").string();
+  const std::string out = testing::temp_path("failed_run.h5");
   const Scene s = load("uniaxial_block", {"boundary.3.offset=-1.5", "solver.min_increment=0.01"});
   const RunResult r = run(s, out);
   EXPECT_FALSE(r.success);
@@ -161,6 +161,62 @@ TEST(StaticScenes, FailedRunKeepsCompletedIncrements) {
   EXPECT_EQ((read_step_positions(out, summary.num_steps - 1) - r.x).cwiseAbs().maxCoeff(), 0.0);
   std::filesystem::remove(out);
   std::filesystem::remove(std::filesystem::path(out).replace_extension(".xmf"));
+}
+
+// Gravity ramps with the load: a bar sagging in ten increments of 0.1 is, at every step, the
+// equilibrium under that fraction of its weight, the same state a single increment reaches under
+// the scaled gravity. Both solves stop at a Newton residual of 1e-13 of the force scale (apps
+// README), which bounds their difference far below the 1e-8 of the sag asserted.
+TEST(StaticScenes, RampedGravityGivesTheEquilibriumOfEveryIncrement) {
+  const std::vector<std::string> bar = {"bodies.0.mesh.cells=[20,2,2]",
+                                        "bodies.0.material.youngs=1e7", "solver.tolerance=1e-13"};
+  std::vector<std::string> ramped = bar;
+  ramped.insert(ramped.end(), {"solver.initial_increment=0.1", "solver.max_increment=0.1"});
+  std::vector<Points> states;
+  RunOptions options;
+  options.observer = [&](const StepRecord&, const Points& x) { states.push_back(x); };
+  std::ostringstream log;
+  const Scene s = load("cantilever_gravity", ramped);
+  const RunResult r = run_scene(s, options, log);
+  ASSERT_TRUE(r.success) << r.message;
+  ASSERT_EQ(states.size(), 10u);
+  const double sag = (states.back() - s.mesh.X).cwiseAbs().maxCoeff();
+  EXPECT_GT(sag, 0.05) << "a sag well beyond small strain";
+  for (int k = 1; k <= 10; ++k) {
+    std::vector<std::string> single = bar;
+    single.push_back("gravity=[0,0," + std::to_string(-9.81 * k / 10) + "]");
+    const RunResult one = run(load("cantilever_gravity", single));
+    ASSERT_TRUE(one.success) << one.message;
+    EXPECT_LE((states[k - 1] - one.x).cwiseAbs().maxCoeff(), 1e-8 * sag) << "increment " << k;
+  }
+}
+
+// A quarter of a block under its own weight, on two symmetry planes and a held base: every
+// constrained direction belongs to one condition, so the reaction rows sum to minus the
+// applied load (the weight) and each symmetry plane carries force along its normal only.
+TEST(StaticScenes, ReactionsOfAQuarterModelSumToTheAppliedLoad) {
+  const std::string path = testing::temp_path("quarter.json");
+  std::ofstream(path) << R"({
+    "gravity": [0, 0, -9.81],
+    "bodies": [{"name": "quarter", "mesh": {"generator": "box", "lo": [0, 0, 0], "hi": [0.5, 0.5, 0.3], "cells": [5, 5, 3]},
+                "material": {"model": "neo_hookean", "youngs": 1e5, "poisson": 0.3}, "density": 1000}],
+    "boundary": [
+      {"name": "symmetry_x", "type": "plane", "normal": [1, 0, 0], "nodes": {"plane": {"normal": [1, 0, 0], "offset": 0}}},
+      {"name": "symmetry_y", "type": "plane", "normal": [0, 1, 0], "nodes": {"plane": {"normal": [0, 1, 0], "offset": 0}}},
+      {"name": "base", "type": "fixed", "nodes": {"plane": {"normal": [0, 0, 1], "offset": 0}}}
+    ],
+    "solver": {"tolerance": 1e-14}
+  })";
+  const Scene s = load_scene(path);
+  std::filesystem::remove(path);
+  const RunResult r = run(s);
+  ASSERT_TRUE(r.success) << r.message;
+  const double weight = 1000 * 0.5 * 0.5 * 0.3 * 9.81;
+  const auto& R = r.steps.back().reactions;
+  const Vec3 total = R.colwise().sum().transpose();
+  EXPECT_LE((total - Vec3(0, 0, weight)).norm(), 1e-10 * weight);
+  EXPECT_LE(R.row(0).tail<2>().norm(), 1e-10 * weight) << "symmetry_x pushes along x only";
+  EXPECT_LE(std::abs(R(1, 0)) + std::abs(R(1, 2)), 1e-10 * weight) << "symmetry_y along y only";
 }
 
 // Every scene shipped in apps/scenes is run by some test; this list is checked against the folder.

@@ -37,7 +37,7 @@ TEST(MaterialDepthContact, UndeformedBodiesWithSelfContactHaveNoContactForces) {
   m.add_body("ball", ball_mesh({Vec3::Zero(), 0.5, 6}));
   m.add_body("box", box_mesh({Vec3(1, 0, 0), Vec3(2, 0.5, 0.3), Eigen::Vector3i(6, 3, 2)}));
   MaterialDepthContact c(m, material_depth(m), {1e6, true});
-  c.begin_step(m.X, 0);
+  c.begin_step(m.X);
   Evaluated r;
   evaluate(c, m.X, r);
   EXPECT_EQ(r.energy, 0.0);
@@ -54,7 +54,7 @@ TEST(MaterialDepthContact, AssembledDerivativesMatchFiniteDifferences) {
   m.add_body("high",
              box_mesh({Vec3(0.23, 0.17, 0.3), Vec3(0.83, 0.77, 0.6), Eigen::Vector3i(3, 3, 2)}));
   MaterialDepthContact c(m, material_depth(m), {1e5, true});
-  c.begin_step(m.X, 0);
+  c.begin_step(m.X);
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(-0.02, 0.02);
   Points x = m.X;
@@ -99,7 +99,7 @@ double largest_jump(ForceModule& m, const Mesh& mesh, Index plate_first_node, in
   for (int k = 0; k <= steps; ++k) {
     Points x = mesh.X;
     x.bottomRows(mesh.num_nodes() - plate_first_node).col(0).array() += -0.2 + 0.4 * k / steps;
-    m.begin_step(x, 0);
+    m.begin_step(x);
     m.prepare(x);
     VectorX g = VectorX::Zero(3 * x.rows());
     m.evaluate(x, &g, nullptr);
@@ -136,17 +136,23 @@ TEST(ObstacleContact, PlaneForceMatchesClosedForm) {
       single_body_mesh(box_mesh({Vec3(0, 0, -d), Vec3(1, 1, 0.2), Eigen::Vector3i(4, 4, 2)}));
   ObstacleContact o(m, {0},
                     {{"floor", PlaneObstacle{Vec3::Zero(), Vec3::UnitZ()}, Vec3::Zero(), eps}});
-  o.begin_step(m.X, 0);
+  o.set_load(0);
   o.prepare(m.X);
-  EXPECT_LE((o.total_force(m.X) - Vec3(0, 0, eps * (d + 2 * d * d))).norm(), 1e-8);
-  EXPECT_NEAR(o.contact_area(m.X), 1 + 4 * d, 1e-12);
+  StepRecord step;
+  o.report(m.X, step);
+  ASSERT_EQ(step.contact.size(), 1u);
+  EXPECT_EQ(step.contact[0].name, "obstacle floor");
+  EXPECT_LE((step.contact[0].force - Vec3(0, 0, eps * (d + 2 * d * d))).norm(), 1e-8);
+  EXPECT_NEAR(step.contact[0].area, 1 + 4 * d, 1e-12);
   EXPECT_NEAR(o.evaluate(m.X, nullptr, nullptr), eps / 2 * (d * d + 4 * d * d * d / 3), 1e-9);
   // The obstacle moves with the load factor: at load 1 the plane has risen by d, doubling depths.
   ObstacleContact moving(
       m, {0}, {{"floor", PlaneObstacle{Vec3::Zero(), Vec3::UnitZ()}, Vec3(0, 0, d), eps}});
-  moving.begin_step(m.X, 1.0);
+  moving.set_load(1.0);
   moving.prepare(m.X);
-  EXPECT_NEAR(moving.total_force(m.X)(2), eps * (2 * d + 2 * 4 * d * d), 1e-8);
+  StepRecord moved;
+  moving.report(m.X, moved);
+  EXPECT_NEAR(moved.contact[0].force(2), eps * (2 * d + 2 * 4 * d * d), 1e-8);
 }
 
 // One tet inside a sphere obstacle: each boundary face carries eps A / 12 (sum G_i^2 + sum G_i G_j)
@@ -178,7 +184,7 @@ TEST(ObstacleContact, SphereEnergyAndForceMatchTheLinearDepthIntegral) {
     return W;
   };
   for (double load : {0.0, 1.0}) {
-    o.begin_step(m.X, load);
+    o.set_load(load);
     o.prepare(m.X);
     VectorX g = VectorX::Zero(12);
     const double W = o.evaluate(m.X, &g, nullptr);

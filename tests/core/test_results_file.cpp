@@ -112,11 +112,11 @@ Points positions(const Mesh& mesh, int k) {
   return mesh.X * (1.0 + k / 7.0);
 }
 
-StepRecord step_record(const Points& x, int k) {
+// Step k's record; two contact interfaces whose values depend on k.
+StepRecord step_record(int k) {
   StepRecord s;
   s.index = k;
   s.load = k / 3.0;
-  s.x = &x;
   s.newton_iterations = 2 + k;
   s.linear_iterations = 10 * k + 1;
   s.energy = 0.5 * k;
@@ -125,6 +125,8 @@ StepRecord step_record(const Points& x, int k) {
   s.reactions.resize(2, 3);
   s.reactions << 1.0 / k, 2, 3,  //
       -1.0 / k, -2, -3;
+  s.contact = {{"block/ball", Vec3(0.5 * k, -1, 2), 3.0 * k, 0.01 * k},
+               {"obstacle floor", Vec3(0, 0, k), 4.0, 0.02}};
   return s;
 }
 
@@ -151,13 +153,9 @@ TEST_F(ResultsFileTest, RoundTripOfMeshRunStepsAndTiming) {
   {
     ResultsFile file(path, f_.mesh, f_.depth, f_.info);
     for (int k = 1; k <= 3; ++k) {
-      StepRecord s = step_record(x[k - 1], k);
-      if (k == 2) {
-        s.v = &v;
-        s.contact_area = 0.03;
-        s.contact_force = 12.5;
-      }
-      file.append_step(s);
+      StepRecord s = step_record(k);
+      s.kinetic_energy = 0.75 * k;
+      file.append_step(s, x[k - 1], k == 2 ? &v : nullptr);
       if (k == 1) {  // readable while the writer is open
         const ResultsSummary during = read_results_summary(path);
         EXPECT_EQ(during.status, "running");
@@ -201,7 +199,7 @@ TEST_F(ResultsFileTest, RoundTripOfMeshRunStepsAndTiming) {
   for (int k = 1; k <= 3; ++k) {
     SCOPED_TRACE("step " + std::to_string(k));
     const std::string g = "/steps/00000" + std::to_string(k);
-    const StepRecord expected = step_record(x[k - 1], k);
+    const StepRecord expected = step_record(k);
     EXPECT_EQ(raw.attribute<int>(g, "index", H5T_NATIVE_INT), k);
     EXPECT_EQ(raw.attribute<double>(g, "load", H5T_NATIVE_DOUBLE), k / 3.0);
     EXPECT_EQ(raw.attribute<int>(g, "newton_iterations", H5T_NATIVE_INT), 2 + k);
@@ -217,13 +215,21 @@ TEST_F(ResultsFileTest, RoundTripOfMeshRunStepsAndTiming) {
               std::vector<double>({1.0 / k, 2, 3, -1.0 / k, -2, -3}));
     EXPECT_EQ(dims, std::vector<hsize_t>({2, 3}));
     EXPECT_EQ(raw.has((g + "/v").c_str()), k == 2);
-    EXPECT_EQ(raw.has_attribute(g, "contact_area"), k == 2);
-    EXPECT_EQ(raw.has_attribute(g, "contact_force"), k == 2);
+    EXPECT_EQ(raw.has_attribute(g, "kinetic_energy"), k == 2);  // only with velocities
+    EXPECT_EQ(raw.attribute<double>(g, "contact_area", H5T_NATIVE_DOUBLE), expected.contact_area());
+    EXPECT_EQ(raw.values<double>(g + "/contact_forces", H5T_NATIVE_DOUBLE, dims),
+              std::vector<double>({0.5 * k, -1, 2, 0, 0, double(k)}));
+    EXPECT_EQ(dims, std::vector<hsize_t>({2, 3}));
+    EXPECT_EQ(raw.values<double>(g + "/contact_force_magnitudes", H5T_NATIVE_DOUBLE, dims),
+              std::vector<double>({3.0 * k, 4.0}));
+    EXPECT_EQ(raw.values<double>(g + "/contact_areas", H5T_NATIVE_DOUBLE, dims),
+              std::vector<double>({0.01 * k, 0.02}));
   }
   EXPECT_EQ(raw.values<double>("/steps/000002/v", H5T_NATIVE_DOUBLE, dims),
             std::vector<double>(36, 0.125));
-  EXPECT_EQ(raw.attribute<double>("/steps/000002", "contact_area", H5T_NATIVE_DOUBLE), 0.03);
-  EXPECT_EQ(raw.attribute<double>("/steps/000002", "contact_force", H5T_NATIVE_DOUBLE), 12.5);
+  EXPECT_EQ(raw.attribute<double>("/steps/000002", "kinetic_energy", H5T_NATIVE_DOUBLE), 1.5);
+  EXPECT_EQ(raw.strings("/run/contact_names"),
+            std::vector<std::string>({"block/ball", "obstacle floor"}));
 
   const ResultsSummary s = read_results_summary(path);
   EXPECT_EQ(s.num_nodes, 12);
@@ -270,8 +276,8 @@ TEST_F(ResultsFileTest, KilledWriterKeepsCompletedSteps) {
   if (child == 0) {  // writes two steps, then dies without closing the file or running destructors
     try {
       ResultsFile file(path, f_.mesh, f_.depth, f_.info);
-      file.append_step(step_record(x1, 1));
-      file.append_step(step_record(x2, 2));
+      file.append_step(step_record(1), x1, nullptr);
+      file.append_step(step_record(2), x2, nullptr);
       _exit(3);
     } catch (...) {
       _exit(4);
@@ -295,11 +301,11 @@ TEST_F(ResultsFileTest, XdmfSidecarListsEveryStepRelatively) {
   const fs::path path = dir_ / "sidecar.h5";
   const Points x1 = positions(f_.mesh, 1), x2 = positions(f_.mesh, 2);
   ResultsFile file(path, f_.mesh, f_.depth, f_.info);
-  StepRecord s1 = step_record(x1, 1), s2 = step_record(x2, 2);
+  StepRecord s1 = step_record(1), s2 = step_record(2);
   s1.load = 0.25;
   s2.load = 1.5;
-  file.append_step(s1);
-  file.append_step(s2);
+  file.append_step(s1, x1, nullptr);
+  file.append_step(s2, x2, nullptr);
 
   std::ifstream in(dir_ / "sidecar.xmf");
   ASSERT_TRUE(in) << "no sidecar";
@@ -327,15 +333,18 @@ TEST_F(ResultsFileTest, RejectsStepsThatDoNotMatchTheMesh) {
   const fs::path path = dir_ / "mismatch.h5";
   ResultsFile file(path, f_.mesh, f_.depth, f_.info);
   const Points x = positions(f_.mesh, 1), short_x = x.topRows(5);
-  StepRecord s = step_record(short_x, 1);
-  EXPECT_THROW(file.append_step(s), InputError);
-  s = step_record(x, 1);
+  StepRecord s = step_record(1);
+  EXPECT_THROW(file.append_step(s, short_x, nullptr), InputError);
+  EXPECT_THROW(file.append_step(s, x, &short_x), InputError);
   s.reactions.resize(1, 3);
-  EXPECT_THROW(file.append_step(s), InputError);
-  s = step_record(x, 1);
-  file.append_step(s);
+  EXPECT_THROW(file.append_step(s, x, nullptr), InputError);
+  s = step_record(1);
+  file.append_step(s, x, nullptr);
+  StepRecord other_interfaces = step_record(2);
+  other_interfaces.contact.pop_back();
+  EXPECT_THROW(file.append_step(other_interfaces, x, nullptr), InputError);
   try {
-    file.append_step(s);
+    file.append_step(s, x, nullptr);
     FAIL() << "a step written twice was accepted";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();

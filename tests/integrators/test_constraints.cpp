@@ -85,6 +85,30 @@ TEST(Constraints, ReactionsSumConstrainedGradientComponents) {
   EXPECT_LE((R.row(1) - Eigen::RowVector3d(0, 0, 12)).norm(), 1e-15);
 }
 
+// A node in two conditions counts once: a full prescription owns the whole node, and of two
+// planes each owns the direction it added (Gram-Schmidt in list order). The rows then sum to the
+// constrained components of g, each once.
+TEST(Constraints, EveryConstrainedDirectionBelongsToOneCondition) {
+  const Points X = four_points();
+  const Constraints c(X, {{"symmetry", {0, 1, 2}, InPlane{Vec3::UnitX(), 0}},
+                          {"base", {0}, Fixed{}},
+                          {"floor", {1}, InPlane{Vec3(1, 0, 1), 0}}});
+  VectorX g(12);
+  for (Index i = 0; i < 12; ++i) g(i) = i + 1;
+  const auto R = c.reactions(g);
+  // symmetry: x of nodes 1 and 2 (node 0 belongs to base); floor: what (1, 0, 1) adds beyond
+  // x at node 1, which is z.
+  EXPECT_LE((R.row(0) - Eigen::RowVector3d(4 + 7, 0, 0)).norm(), 1e-14);
+  EXPECT_LE((R.row(1) - Eigen::RowVector3d(1, 2, 3)).norm(), 1e-14);
+  EXPECT_LE((R.row(2) - Eigen::RowVector3d(0, 0, 6)).norm(), 1e-14);
+  VectorX free = g;
+  c.project(free);
+  const VectorX constrained = g - free;
+  const Vec3 total(constrained(Eigen::seq(0, 11, 3)).sum(), constrained(Eigen::seq(1, 11, 3)).sum(),
+                   constrained(Eigen::seq(2, 11, 3)).sum());
+  EXPECT_LE((R.colwise().sum().transpose() - total).norm(), 1e-14);
+}
+
 TEST(Constraints, RejectsBadInput) {
   const Points X = four_points();
   EXPECT_THROW(Constraints(X, {{"a", {9}, Fixed{}}}), InputError);

@@ -252,6 +252,23 @@ TEST(MooneyRivlin, ShearModulusIsTwiceC1PlusC2) {
   EXPECT_NEAR(linearized_moduli(m).mu, 2 * (m.C1 + m.C2), 1e-9);
 }
 
+// lambda = 4 (a + C2): the linearisation (by finite differences of the stress, in
+// linearized_moduli) must return the requested E and nu for any admissible C2.
+TEST(MooneyRivlin, FromYoungsHasThoseSmallStrainModuli) {
+  for (const double nu : {0.0, 0.3, 0.45, 0.49}) {
+    for (const double c2_share : {0.0, 0.25, 0.5}) {
+      const double E = 3e4, mu = E / (2 * (1 + nu));
+      const MooneyRivlin m = MooneyRivlin::from_youngs(E, nu, c2_share * mu / 2);
+      EXPECT_NO_THROW(m.validate());
+      const LinearizedModuli lin = linearized_moduli(m);
+      EXPECT_NEAR(lin.youngs(), E, 1e-7 * E) << "nu " << nu << ", C2 share " << c2_share;
+      EXPECT_NEAR(lin.poisson(), nu, 1e-7) << "nu " << nu << ", C2 share " << c2_share;
+    }
+  }
+  EXPECT_THROW(MooneyRivlin::from_youngs(3e4, 0.5), std::invalid_argument);
+  EXPECT_THROW(MooneyRivlin::from_youngs(3e4, 0.3, 1e5), std::invalid_argument);
+}
+
 TEST(NeoHookean, LinearizedModuliAreTheLameParameters) {
   const NeoHookean m = neo();
   const LinearizedModuli lin = linearized_moduli(m);

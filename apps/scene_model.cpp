@@ -1,0 +1,99 @@
+#include "apps/scene_model.hpp"
+
+#include <cmath>
+
+#include "contact/material_depth.hpp"
+#include "contact/node_to_surface_contact.hpp"
+#include "core/lumped_mass.hpp"
+#include "integrators/consistent_mass.hpp"
+#include "integrators/gravity.hpp"
+#include "integrators/stiffness_tether.hpp"
+
+namespace depthfem {
+
+// Relative tolerance x elastic force scale E h^2 x sqrt(#dofs): a bound on the root-mean-square
+// nodal residual relative to the force of unit strain on one cell.
+double newton_tolerance(const Scene& scene) {
+  double E = 0;
+  for (const ElasticGroup& g : scene.groups) E = std::max(E, material_moduli(g.material).youngs());
+  const double h = mean_edge_length(scene.mesh.X, scene.mesh.tets);
+  return scene.tolerance * E * h * h * std::sqrt(3.0 * scene.mesh.num_nodes());
+}
+
+LifecycleTerms SceneModel::lifecycle_terms() const {
+  LifecycleTerms terms;
+  if (quasi_viscosity) terms.excluded.push_back(quasi_viscosity);
+  if (implicit.inertia) terms.excluded.push_back(implicit.inertia);
+  for (const Tether* d : implicit.damping) terms.excluded.push_back(d);
+  terms.mass = implicit.inertia ? implicit.inertia : mass_outside_system.get();
+  return terms;
+}
+
+std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers) {
+  const Mesh& mesh = scene.mesh;
+  auto model = std::make_unique<SceneModel>(mesh.num_nodes(), timers);
+  System& system = model->system;
+  model->elasticity = &system.add(std::make_unique<Elasticity>(mesh.X, mesh.tets, scene.groups));
+  model->lumped_mass = lumped_mass(mesh.X, mesh.tets, scene.tet_density);
+  const VectorX& mass = model->lumped_mass;
+  const bool time_dependent = scene.analysis != "static";
+  if (scene.gravity.norm() > 0) {
+    const bool ramp = !time_dependent && scene.ramp_body_loads;
+    system.add(std::make_unique<Gravity>(mass, scene.gravity, ramp));
+  }
+  // Time-dependent analyses: the implicit schemes carry inertia and damping as tethers.
+  const DynamicOptions& dyn = scene.dynamic_options;
+  const bool implicit_scheme =
+      dyn.integrator == Integrator::kImplicitEuler || dyn.integrator == Integrator::kNewmark;
+  if (time_dependent && implicit_scheme) {
+    ImplicitTerms& terms = model->implicit;
+    // Inertia and mass damping with the lumped or the consistent mass matrix.
+    const auto mass_tether = [&](const char* name, double factor) -> Tether* {
+      if (dyn.mass == MassMatrix::kConsistent)
+        return &system.add(
+            std::make_unique<ConsistentMass>(name, mesh.X, mesh.tets, scene.tet_density, factor));
+      return &system.add(std::make_unique<NodalSpring>(name, factor * mass));
+    };
+    if (scene.analysis == "dynamic") terms.inertia = mass_tether("inertia", 1.0);
+    if (scene.analysis == "quasistatic") {
+      terms.damping.push_back(&system.add(std::make_unique<NodalSpring>(
+          "viscosity", quasi_viscosity_stiffness(mesh.X, mesh.tets, scene.viscosity))));
+    }
+    if (dyn.damping.mass > 0)
+      terms.damping.push_back(mass_tether("mass damping", dyn.damping.mass));
+    if (dyn.damping.stiffness > 0) {
+      terms.damping.push_back(&system.add(std::make_unique<StiffnessTether>(
+          "stiffness damping", *model->elasticity, dyn.damping.stiffness)));
+    }
+  }
+  if (time_dependent && !model->implicit.inertia)
+    model->mass_outside_system = std::make_unique<NodalSpring>("mass", mass);
+  if (scene.quasi_viscosity > 0) {
+    model->quasi_viscosity = &system.add(std::make_unique<NodalSpring>(
+        "quasi-viscosity", quasi_viscosity_stiffness(mesh.X, mesh.tets, scene.quasi_viscosity)));
+  }
+  // Contact is built only when the scene asks for it.
+  if (scene.contact == ContactModel::kMaterialDepth) {
+    {
+      PhaseTimers::Scope t(timers, "collision detection: material depth");
+      model->depth = material_depth(mesh);
+    }
+    system.add(std::make_unique<MaterialDepthContact>(mesh, model->depth, scene.contact_options));
+  } else if (scene.contact == ContactModel::kNodeToSurface) {
+    system.add(std::make_unique<NodeToSurfaceContact>(mesh, scene.contact_options.penalty));
+  }
+  if (!scene.obstacles.empty()) {
+    std::vector<Index> deformable;
+    for (size_t b = 0; b < mesh.bodies.size(); ++b)
+      if (!scene.rigid[b]) deformable.push_back(static_cast<Index>(b));
+    system.add(std::make_unique<ObstacleContact>(mesh, deformable, scene.obstacles));
+  }
+  model->constraints = Constraints(mesh.X, scene.constraints);
+  model->static_options = scene.static_options;
+  model->static_options.newton.tolerance = newton_tolerance(scene);
+  model->dynamic_options = scene.dynamic_options;
+  model->dynamic_options.newton.tolerance = model->static_options.newton.tolerance;
+  return model;
+}
+
+}  // namespace depthfem

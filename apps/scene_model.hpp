@@ -1,0 +1,43 @@
+#pragma once
+/// The force modules, constraints and solver settings of a scene: everything a driver needs,
+/// assembled once from the Scene, with typed handles to the modules a driver sets per step.
+
+#include <memory>
+
+#include "apps/scene.hpp"
+#include "integrators/implicit_stepper.hpp"
+#include "integrators/step_lifecycle.hpp"
+
+namespace depthfem {
+
+/// A scene turned into a System of force modules. Build it with build_model(); it is not
+/// copyable (the System owns the modules, the handles point into it).
+struct SceneModel {
+  SceneModel(Index num_nodes, PhaseTimers& timers) : system(num_nodes, timers) {}
+
+  System system;
+  Constraints constraints;
+  VectorX lumped_mass;  ///< per node [kg]
+  VectorX depth;        ///< material depth per node [m]; empty without material-depth contact
+  const Elasticity* elasticity = nullptr;
+  NodalSpring* quasi_viscosity = nullptr;  ///< static analysis with quasi_viscosity > 0
+  ImplicitTerms implicit;                  ///< inertia and damping of the implicit schemes
+  /// K = M for the kinetic energy of time-dependent runs: the inertia module when the scheme
+  /// has one, else this lumped mass (not part of the System).
+  std::unique_ptr<NodalSpring> mass_outside_system;
+  StaticOptions static_options;    ///< with the Newton tolerance of the scene
+  DynamicOptions dynamic_options;  ///< with the Newton tolerance of the scene
+
+  /// Which modules the lifecycle leaves out of the reported energy, and the mass matrix.
+  LifecycleTerms lifecycle_terms() const;
+};
+
+/// Builds the modules `scene` asks for (and nothing else). Material depth is computed here
+/// (timed as collision detection). Throws InputError for inconsistent input.
+std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers);
+
+/// Newton tolerance [N] of a scene: its relative tolerance x an elastic force scale (see
+/// apps/README.md).
+double newton_tolerance(const Scene& scene);
+
+}  // namespace depthfem
