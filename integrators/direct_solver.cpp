@@ -56,6 +56,7 @@ struct DirectSolver::Impl {
   std::vector<int> perm;           // fill-reducing dof ordering
   cholmod_factor* llt = nullptr;   // supernodal LL^T
   cholmod_factor* ldlt = nullptr;  // simplicial LDL^T, analysed on first need
+  bool llt_valid = false;          // llt holds the factor of an earlier matrix of this pattern
   cholmod_dense *X = nullptr, *Y = nullptr, *E = nullptr;  // solve workspace
 
   explicit Impl(DirectSolverOptions o) : options(o) {
@@ -75,6 +76,7 @@ struct DirectSolver::Impl {
     cholmod_free_factor(&llt, &c);
     cholmod_free_factor(&ldlt, &c);
     version = 0;
+    llt_valid = false;
   }
   void check(const char* what) const {
     if (c.status < CHOLMOD_OK)
@@ -87,6 +89,7 @@ struct DirectSolver::Impl {
   cholmod_factor* analyse_with(int supernodal);
   bool factorize(cholmod_factor* L, double s);
   void solve_with(cholmod_factor* L, const VectorX& b, VectorX& x);
+  bool reuse(const BlockSparseMatrix& M, const VectorX& b, VectorX& x, int& iterations);
 };
 
 // Orders the graph G of the 3x3 blocks (nine times fewer edges than the scalar graph) and
@@ -187,12 +190,51 @@ const DirectAnalysis& DirectSolver::analyse(const BlockSparseMatrix& M) {
   return impl_->analysis;
 }
 
+// Conjugate gradients preconditioned by the kept factor; false when they fall short.
+bool DirectSolver::Impl::reuse(const BlockSparseMatrix& M, const VectorX& b, VectorX& x,
+                               int& iterations) {
+  const int cap =
+      static_cast<int>(std::clamp(analysis.flops / (40 * analysis.factor_entries), 2.0, 50.0));
+  x.setZero(b.size());
+  VectorX r = b, z, p, Ap;
+  solve_with(llt, r, z);
+  p = z;
+  double rz = r.dot(z);
+  for (iterations = 1; iterations <= cap; ++iterations) {
+    M.multiply(p, Ap);
+    const double pAp = p.dot(Ap);
+    if (!(pAp > 0)) return false;  // A is not positive definite
+    const double alpha = rz / pAp;
+    x += alpha * p;
+    r -= alpha * Ap;
+    const double reduction = r.norm() / b.norm();
+    if (reduction <= options.reuse_tolerance) return true;
+    // Give up as soon as the reduction so far, extrapolated at its mean rate, misses the cap.
+    if (iterations >= 2 &&
+        iterations * std::log(options.reuse_tolerance) / std::log(reduction) > cap)
+      return false;
+    solve_with(llt, r, z);
+    const double rz_next = r.dot(z);
+    p = z + (rz_next / rz) * p;
+    rz = rz_next;
+  }
+  --iterations;
+  return false;
+}
+
 DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& b, VectorX& x) {
   Impl& s = *impl_;
   analyse(M);
-  M.scalar_values(s.pattern, static_cast<double*>(s.A->x));
   DirectSolveStats stats;
+  if (s.llt_valid && s.options.reuse_tolerance > 0 && s.reuse(M, b, x, stats.cg_iterations)) {
+    stats.success = x.allFinite();
+    return stats;
+  }
+  M.scalar_values(s.pattern, static_cast<double*>(s.A->x));
+  stats.factored = true;
+  s.llt_valid = false;
   if (s.factorize(s.llt, 0)) {
+    s.llt_valid = true;
     s.solve_with(s.llt, b, x);
   } else if (s.options.indefinite == IndefiniteFallback::kLdlt) {
     if (!s.ldlt) s.ldlt = s.analyse_with(CHOLMOD_SIMPLICIAL);
@@ -209,6 +251,7 @@ DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& 
       shift *= 4;
       if (!(shift < 1e3 * scale)) return stats;
     }
+    s.llt_valid = true;
     s.solve_with(s.llt, b, x);
     stats.shift = shift;
   }

@@ -153,13 +153,15 @@ LinearSolveStats LinearSolver::cg(const BlockSparseMatrix& A, const VectorX& b, 
   return {k, rel, rel <= options_.tolerance};
 }
 
+// Iterations: one per factorisation plus the CG iterations on a kept factor.
 LinearSolveStats LinearSolver::direct(const BlockSparseMatrix& A, const VectorX& b, VectorX& x) {
   if (!direct_) direct_ = std::make_unique<DirectSolver>(options_.direct);
   const DirectSolveStats d = direct_->solve(A, b, x);
-  if (!d.success) return {1, 1.0, false, d.shift};
+  const int iterations = (d.factored ? 1 : 0) + d.cg_iterations;
+  if (!d.success) return {iterations, 1.0, false, d.shift};
   VectorX Ax;
   A.multiply(x, Ax);
-  return {1, (b - Ax).norm() / b.norm(), true, d.shift};
+  return {iterations, (b - Ax).norm() / b.norm(), true, d.shift};
 }
 
 // CG needs a positive definite matrix; one it fails on (indefinite: deep contact, past a
