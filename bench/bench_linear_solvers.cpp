@@ -82,6 +82,9 @@ void BM_DirectAnalysis(benchmark::State& state) {
   }
   state.counters["flops"] = a.flops;
   state.counters["L_entries"] = a.factor_entries;
+  // What LinearSolver's auto compares with auto_flops_per_entry.
+  state.counters["flops_per_entry"] =
+      a.flops / ((9.0 * p.A.num_blocks() + 3.0 * p.A.num_nodes()) / 2);
   state.counters["metis"] = a.ordering == DirectOrdering::kMetis;
   set_counters(state, p);
 }
@@ -112,7 +115,7 @@ void BM_AmgRepeatSolve(benchmark::State& state) {
 }
 
 BENCHMARK(BM_DirectAnalysis)
-    ->ArgsProduct({{40, 80, 160}, {0, 1, 2}, {1}})
+    ->ArgsProduct({{40, 70, 80, 100, 140, 160, 200, 260}, {0, 1, 2}, {1}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK(BM_DirectRepeatSolve)

@@ -4,9 +4,9 @@
     /usr/bin/python3 bench/plot_scaling.py bench/results/scaling.csv \
         [--before bench/results/scaling_before.csv] --out bench/results/scaling.png
 
-One row of panels per scene: seconds per Newton iteration, linear iterations per Newton
-iteration and peak memory, each against the number of unknowns, one line per solver. The legend
-gives the exponent p of a least-squares fit t ~ n^p over the sizes that solver completed.
+One row of panels per scene: wall and CPU seconds per Newton iteration, linear iterations per
+Newton iteration and peak memory, each against the number of unknowns, one line per solver. The
+legends give the exponent p of a least-squares fit t ~ n^p over the sizes that solver completed.
 --before adds the rows of another CSV (the code before a change) as dashed lines.
 """
 import argparse
@@ -48,10 +48,10 @@ def main():
     if a.before:
         rows += read(a.before, "before")
     scenes = sorted({r["scene"] for r in rows})
-    fig, axes = plt.subplots(len(scenes), 3, figsize=(15, 4.5 * len(scenes)), squeeze=False)
-    print("| scene | solver | tets | dofs | Newton it. | linear it. / Newton | s / Newton it. | "
-          "linear s / Newton it. | peak MB |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    fig, axes = plt.subplots(len(scenes), 4, figsize=(20, 4.5 * len(scenes)), squeeze=False)
+    print("| scene | solver | tets | unknowns | Newton it. | linear it. / Newton it. | "
+          "s / Newton it. | linear solve s / Newton it. | CPU s / Newton it. | peak MB |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for row_axes, scene in zip(axes, scenes):
         runs = [r for r in rows if r["scene"] == scene]
         for tag, solver in sorted({(r["tag"], r["solver"]) for r in runs}):
@@ -61,20 +61,24 @@ def main():
                 continue
             n = [int(r["dofs"]) for r in done]
             t = [float(r["newton_s_per_it"]) for r in done]
+            cpu = [float(r["cpu_s_per_it"]) for r in done]
             its = [int(r["linear_iterations"]) / int(r["newton_iterations"]) for r in done]
             mem = [float(r["peak_mb"]) for r in done]
             name = f"{solver} ({tag})" if tag else solver
             style = "--" if tag else "-"
-            p = exponent(list(zip(n, t)))
+            p, q = exponent(list(zip(n, t))), exponent(list(zip(n, cpu)))
             row_axes[0].loglog(n, t, style + "o", label=f"{name}: n^{p:.2f}")
-            row_axes[1].semilogx(n, its, style + "o", label=name)
-            row_axes[2].loglog(n, mem, style + "o", label=name)
+            row_axes[1].loglog(n, cpu, style + "o", label=f"{name}: n^{q:.2f}")
+            row_axes[2].semilogx(n, its, style + "o", label=name)
+            row_axes[3].loglog(n, mem, style + "o", label=name)
             for r, k in zip(done, its):
                 print(f"| {scene} | {name} | {r['tets']} | {r['dofs']} | {r['newton_iterations']} | "
                       f"{k:.1f} | {float(r['newton_s_per_it']):.3g} | "
-                      f"{float(r['linear_s_per_it']):.3g} | {float(r['peak_mb']):.0f} |")
-            print(f"| {scene} | {name} | fit | | | | n^{p:.2f} | | |")
-        for ax, label in zip(row_axes, ["seconds per Newton iteration",
+                      f"{float(r['linear_s_per_it']):.3g} | {float(r['cpu_s_per_it']):.3g} | "
+                      f"{float(r['peak_mb']):.0f} |")
+            print(f"| {scene} | {name} | fit | | | | n^{p:.2f} | | n^{q:.2f} | |")
+        for ax, label in zip(row_axes, ["wall seconds per Newton iteration",
+                                        "CPU seconds per Newton iteration",
                                         "linear iterations per Newton iteration",
                                         "peak memory [MB]"]):
             ax.set_xlabel("unknowns")

@@ -19,7 +19,7 @@ for scene in cantilever sliding; do
       timeout "$limit" build/bench/bench_scaling --scene "$scene" --size "$size" \
         --solver "$solver" --out "$out" || status=$?
       if ((status == 124)); then
-        echo "$scene,$size,,,$solver,0,-1,,,,$limit,,,," >> "$out"
+        echo "$scene,$size,,,$solver,0,-1,,,,$limit,,,,," >> "$out"
         echo "$scene $size $solver: stopped after $limit s"
       fi
     done

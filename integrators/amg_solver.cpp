@@ -96,6 +96,12 @@ void AmgSolver::Impl::set_up(const BlockSparseMatrix& M) {
   if (options.preconditioner == AmgPreconditioner::kGamg) {
     check(PCSetType(pc, PCGAMG), "PCSetType");
     check(PCGAMGSetReuseInterpolation(pc, PETSC_TRUE), "PCGAMGSetReuseInterpolation");
+    // Dropping graph edges weaker than 2 % of the diagonal from the aggregation and stopping at
+    // 1000 coarse unknowns: on the bent cantilever (95 k and 266 k unknowns) CG needs 32 and 33
+    // iterations for three Newton steps instead of 52 and 55 (PETSc's defaults 0 and 50).
+    PetscReal threshold = 0.02;
+    check(PCGAMGSetThreshold(pc, &threshold, 1), "PCGAMGSetThreshold");
+    check(PCGAMGSetCoarseEqLim(pc, 1000), "PCGAMGSetCoarseEqLim");
   } else {
     check(PCSetType(pc, PCHYPRE), "PCSetType");
     check(PCHYPRESetType(pc, "boomeramg"), "PCHYPRESetType");

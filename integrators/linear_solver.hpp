@@ -35,7 +35,7 @@ struct LinearSolverOptions {
   AmgSolverOptions amg;
   /// kAuto: AMG-CG when a factorisation would take more flops than this per entry of the
   /// matrix's lower triangle (the measured crossover, README "Linear solvers").
-  double auto_flops_per_entry = 1e4;
+  double auto_flops_per_entry = 2e4;
 };
 
 /// What a solve did.

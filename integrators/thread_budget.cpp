@@ -4,22 +4,28 @@
 #include <omp.h>
 #include <tbb/info.h>
 
+#include <cstdlib>
+
 namespace depthfem {
 
 namespace {
 
 // OpenBLAS's own controls, looked up at run time: with another BLAS there is nothing to set.
+template <class F>
+F openblas(const char* name) {
+  return reinterpret_cast<F>(dlsym(RTLD_DEFAULT, name));
+}
+
 void set_blas_threads(int threads) {
-  using SetThreads = void (*)(int);
-  if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads")))
-    set(threads);
-  if (threads == 1) {
-    // OpenBLAS's pthread build starts its pool when it is loaded; stop it. It starts again
-    // only for a call allowed more than one thread.
-    using Shutdown = int (*)();
-    if (auto stop = reinterpret_cast<Shutdown>(dlsym(RTLD_DEFAULT, "blas_thread_shutdown_")))
-      stop();
-  }
+  // OpenBLAS's pthread pool, started when the library is loaded, lets its threads spin for
+  // 2^28 cycles (0.1 s) after every call before they sleep: after each factorisation they take
+  // the cores from the assembly that follows. The shortest spin it allows (2^4 cycles) comes
+  // from its environment variable (unless the user set one), read again; the pool is stopped
+  // and starts with it at the next call allowed more than one thread (never, with one).
+  setenv("OPENBLAS_THREAD_TIMEOUT", "4", 0);
+  if (auto read_env = openblas<void (*)()>("openblas_read_env")) read_env();
+  if (auto set = openblas<void (*)(int)>("openblas_set_num_threads")) set(threads);
+  if (auto stop = openblas<int (*)()>("blas_thread_shutdown_")) stop();
 }
 
 }  // namespace
