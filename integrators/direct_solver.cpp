@@ -226,6 +226,11 @@ DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& 
   Impl& s = *impl_;
   analyse(M);
   DirectSolveStats stats;
+  if (b.squaredNorm() == 0) {
+    x.setZero(b.size());
+    stats.success = true;
+    return stats;
+  }
   if (s.llt_valid && s.options.reuse_tolerance > 0 && s.reuse(M, b, x, stats.cg_iterations)) {
     stats.success = x.allFinite();
     return stats;

@@ -12,15 +12,20 @@
 namespace depthfem {
 namespace {
 
-TEST(BlockSparseMatrix, ScatteredBlocksEqualDenseAssembly) {
-  const TetMesh m = box_mesh({Vec3::Zero(), Vec3::Ones(), Eigen::Vector3i(2, 2, 1)});
-  const Index n = static_cast<Index>(m.X.rows());
-  SparsityBuilder builder(n);
+// The pattern of the tets of a mesh (every tet couples its four nodes).
+BlockSparseMatrix box_pattern(const TetMesh& m) {
+  SparsityBuilder builder(static_cast<Index>(m.X.rows()));
   for (Index t = 0; t < m.tets.rows(); ++t) {
     const Index v[4] = {m.tets(t, 0), m.tets(t, 1), m.tets(t, 2), m.tets(t, 3)};
     builder.add_clique(v);
   }
-  BlockSparseMatrix A(builder);
+  return BlockSparseMatrix(builder);
+}
+
+TEST(BlockSparseMatrix, ScatteredBlocksEqualDenseAssembly) {
+  const TetMesh m = box_mesh({Vec3::Zero(), Vec3::Ones(), Eigen::Vector3i(2, 2, 1)});
+  const Index n = static_cast<Index>(m.X.rows());
+  BlockSparseMatrix A = box_pattern(m);
   Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(3 * n, 3 * n);
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1, 1);
@@ -51,12 +56,7 @@ TEST(BlockSparseMatrix, ScatteredBlocksEqualDenseAssembly) {
 TEST(BlockSparseMatrix, ScalarViewsEqualTheReferenceMatrix) {
   const TetMesh m = box_mesh({Vec3::Zero(), Vec3::Ones(), Eigen::Vector3i(2, 1, 2)});
   const Index n = static_cast<Index>(m.X.rows());
-  SparsityBuilder builder(n);
-  for (Index t = 0; t < m.tets.rows(); ++t) {
-    const Index v[4] = {m.tets(t, 0), m.tets(t, 1), m.tets(t, 2), m.tets(t, 3)};
-    builder.add_clique(v);
-  }
-  BlockSparseMatrix A(builder);
+  BlockSparseMatrix A = box_pattern(m);
   for (Index k = 0; k < A.num_blocks(); ++k)
     for (int e = 0; e < 9; ++e) A.block(k)(e / 3, e % 3) = 9 * k + e + 1;
   const Eigen::MatrixXd dense(A.to_sparse());
