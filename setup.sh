@@ -9,7 +9,7 @@ cd "$(dirname "$0")"
 
 packages=(build-essential cmake pkg-config libeigen3-dev libtbb-dev libsundials-dev libhdf5-dev
           libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libsuitesparse-dev
-          libopenblas-dev clang-format
+          libopenblas-dev petsc-dev clang-format
           python3-h5py python3-numpy python3-matplotlib)
 missing=()
 for p in "${packages[@]}"; do

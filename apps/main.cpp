@@ -11,6 +11,7 @@
 
 #include "apps/run_scene.hpp"
 #include "core/results_file.hpp"
+#include "integrators/thread_budget.hpp"
 
 namespace {
 
@@ -56,6 +57,7 @@ int run(const std::vector<std::string>& args) {
   }
   if (scene_path.empty()) throw UsageError("run needs a scene file");
   if (options.out.empty()) throw UsageError("run needs --out RESULT.h5");
+  const ThreadBudget budget(options.threads);  // before anything runs (run_scene sets it too)
   const Scene scene = load_scene(scene_path, overrides);
   const RunResult r = run_scene(scene, options, std::cout);
   print_timing(r.timers, r.seconds, std::cout);

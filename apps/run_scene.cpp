@@ -1,8 +1,5 @@
 #include "apps/run_scene.hpp"
 
-#include <tbb/global_control.h>
-#include <tbb/info.h>
-
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -16,6 +13,7 @@
 #include "integrators/implicit_stepper.hpp"
 #include "integrators/static_solver.hpp"
 #include "integrators/symplectic_euler.hpp"
+#include "integrators/thread_budget.hpp"
 
 namespace depthfem {
 
@@ -76,8 +74,8 @@ void print_timing(const PhaseTimers& timers, double total, std::ostream& out) {
 }
 
 RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream& log) {
-  const int threads = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
-  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+  const ThreadBudget budget(options.threads);
+  const int threads = budget.threads();
   const auto start = std::chrono::steady_clock::now();
   RunResult result;
 

@@ -383,12 +383,18 @@ void read_dynamic(JsonObject d, Scene& scene) {
 void read_solver(JsonObject s, Scene& scene) {
   StaticOptions& o = scene.static_options;
   o.newton.linear.kind = s.choice<LinearSolverKind>("linear_solver", "linear solver",
-                                                    {{"direct", LinearSolverKind::kDirect},
+                                                    {{"auto", LinearSolverKind::kAuto},
+                                                     {"direct", LinearSolverKind::kDirect},
+                                                     {"amg", LinearSolverKind::kAmg},
                                                      {"gmres", LinearSolverKind::kGmres},
                                                      {"cg", LinearSolverKind::kCg}});
-  o.newton.linear.tolerance = s.number("linear_tolerance", o.newton.linear.tolerance);
-  o.newton.linear.max_iterations =
-      s.integer("linear_max_iterations", o.newton.linear.max_iterations);
+  // One tolerance and cap for every iterative method; unset, each keeps its own default.
+  LinearSolverOptions& lin = o.newton.linear;
+  if (s.has("linear_tolerance"))
+    lin.tolerance = lin.amg.tolerance = s.number("linear_tolerance", lin.tolerance);
+  if (s.has("linear_max_iterations"))
+    lin.max_iterations = lin.amg.max_iterations =
+        s.integer("linear_max_iterations", lin.max_iterations);
   o.newton.max_iterations = s.integer("max_newton_iterations", o.newton.max_iterations);
   o.newton.max_line_search = s.integer("max_line_search", o.newton.max_line_search);
   o.newton.line_search = s.choice<LineSearchRule>(
@@ -408,8 +414,8 @@ void read_solver(JsonObject s, Scene& scene) {
         "",
         "need 0 < min_increment <= initial_increment <= max_increment and initial_increment <= 1");
   }
-  if (!(o.newton.linear.tolerance > 0 && o.newton.linear.tolerance < 1))
-    s.fail("linear_tolerance", "must be in (0, 1)");
+  if (!(lin.tolerance > 0 && lin.tolerance < 1)) s.fail("linear_tolerance", "must be in (0, 1)");
+  if (lin.max_iterations < 1) s.fail("linear_max_iterations", "must be >= 1");
   if (o.newton.max_iterations < 1) s.fail("max_newton_iterations", "must be >= 1");
   if (o.newton.max_line_search < 0) s.fail("max_line_search", "must be >= 0");
   if (o.newton.linear.max_iterations < 1) s.fail("linear_max_iterations", "must be >= 1");

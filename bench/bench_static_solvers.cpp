@@ -49,7 +49,7 @@ int main(int argc, char** argv) {
   csv << "scene,dofs,linear_solver,line_search,success,steps,newton_iterations,linear_iterations,"
          "seconds,force_stiffness_s,linear_solve_s,final_energy\n";
   for (const Case& c : cases) {
-    for (const char* solver : {"direct", "gmres", "cg"}) {
+    for (const char* solver : {"auto", "direct", "amg", "gmres", "cg"}) {
       for (const char* rule : {"energy", "residual"}) {
         std::vector<Override> o;
         for (const std::string& s : c.overrides) o.push_back(parse_override(s));

@@ -4,6 +4,8 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
+#include <limits>
 #include <stdexcept>
 
 namespace depthfem {
@@ -21,8 +23,16 @@ std::vector<std::pair<Index, Index>> SparsityBuilder::pairs() const {
   return p;
 }
 
-BlockSparseMatrix::BlockSparseMatrix(const SparsityBuilder& builder) {
+namespace {
+std::atomic<std::uint64_t> last_pattern_version{0};
+}  // namespace
+
+BlockSparseMatrix::BlockSparseMatrix(const SparsityBuilder& builder)
+    : pattern_version_(++last_pattern_version) {
   const std::vector<std::pair<Index, Index>> pairs = builder.pairs();
+  // Scalar views index 9 values per block with Index.
+  if (pairs.size() > static_cast<size_t>(std::numeric_limits<Index>::max() / 9))
+    throw std::length_error("BlockSparseMatrix: more than 2^31 / 9 blocks");
   row_begin_.assign(static_cast<size_t>(builder.num_nodes()) + 1, 0);
   col_.resize(pairs.size());
   for (size_t k = 0; k < pairs.size(); ++k) {
@@ -76,6 +86,53 @@ Eigen::SparseMatrix<double> BlockSparseMatrix::to_sparse() const {
   Eigen::SparseMatrix<double> A(3 * num_nodes(), 3 * num_nodes());
   A.setFromTriplets(t.begin(), t.end());
   return A;
+}
+
+// Row 3i+c holds, for every block k = (i, j) of block row i, the entries (3i+c, 3j+d) =
+// values[9k + 3c + d]; the upper triangle keeps j > i, and d >= c in the diagonal block.
+ScalarPattern BlockSparseMatrix::scalar_pattern(Triangle triangle) const {
+  const bool upper = triangle == Triangle::kUpper;
+  ScalarPattern p;
+  p.triangle = triangle;
+  p.row_begin.assign(3 * static_cast<size_t>(num_nodes()) + 1, 0);
+  for (Index i = 0; i < num_nodes(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      Index n = 0;
+      for (Index k = row_begin_[i]; k < row_begin_[i + 1]; ++k)
+        if (!upper || col_[k] > i)
+          n += 3;
+        else if (col_[k] == i)
+          n += 3 - c;
+      p.row_begin[3 * i + c + 1] = p.row_begin[3 * i + c] + n;
+    }
+  p.col.resize(p.row_begin.back());
+  for (Index i = 0; i < num_nodes(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      Index q = p.row_begin[3 * i + c];
+      for (Index k = row_begin_[i]; k < row_begin_[i + 1]; ++k) {
+        const Index j = col_[k];
+        if (upper && j < i) continue;
+        for (int d = upper && j == i ? c : 0; d < 3; ++d) p.col[q++] = 3 * j + d;
+      }
+    }
+  return p;
+}
+
+void BlockSparseMatrix::scalar_values(const ScalarPattern& pattern, double* out) const {
+  const bool upper = pattern.triangle == Triangle::kUpper;
+  tbb::parallel_for(tbb::blocked_range<Index>(0, num_nodes(), 512),
+                    [&](const tbb::blocked_range<Index>& r) {
+                      for (Index i = r.begin(); i < r.end(); ++i)
+                        for (int c = 0; c < 3; ++c) {
+                          double* o = out + pattern.row_begin[3 * i + c];
+                          for (Index k = row_begin_[i]; k < row_begin_[i + 1]; ++k) {
+                            const Index j = col_[k];
+                            if (upper && j < i) continue;
+                            const double* v = values_.data() + 9 * static_cast<size_t>(k) + 3 * c;
+                            for (int d = upper && j == i ? c : 0; d < 3; ++d) *o++ = v[d];
+                          }
+                        }
+                    });
 }
 
 }  // namespace depthfem

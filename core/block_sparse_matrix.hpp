@@ -2,6 +2,7 @@
 /// Sparse symmetric-pattern matrix of dense 3x3 node blocks (block compressed sparse row).
 
 #include <Eigen/SparseCore>
+#include <cstdint>
 #include <span>
 #include <utility>
 #include <vector>
@@ -25,6 +26,21 @@ class SparsityBuilder {
   std::vector<std::pair<Index, Index>> pairs_;
 };
 
+/// Which entries of a matrix a scalar view holds.
+enum class Triangle {
+  kFull,   ///< every entry
+  kUpper,  ///< columns >= row: of a symmetric matrix also its lower triangle by columns
+};
+
+/// Scalar compressed-row pattern (rows and columns are dofs, columns sorted within a row) of a
+/// BlockSparseMatrix, built once per block pattern. The upper triangle by rows of a symmetric
+/// matrix is its lower triangle by columns: what CHOLMOD reads.
+struct ScalarPattern {
+  Triangle triangle = Triangle::kFull;
+  std::vector<Index> row_begin;  ///< 3 #nodes + 1 offsets into col
+  std::vector<Index> col;        ///< column of every entry
+};
+
 /// Global stiffness matrix over interleaved degrees of freedom (dof 3 * node + component),
 /// stored as 3x3 blocks: block k couples row node i with column node col(k) and its nine values
 /// sit together, row-major, at values()[9 k ..]. One tet scatters 16 blocks = 16 short contiguous
@@ -35,6 +51,10 @@ class BlockSparseMatrix {
   BlockSparseMatrix() = default;
   /// Builds the pattern (values zero) from the couplings gathered in `builder`.
   explicit BlockSparseMatrix(const SparsityBuilder& builder);
+
+  /// Identifies the pattern: every pattern built gets a new version (also one with the same
+  /// number of blocks); copies share it. Solvers key their per-pattern analysis on it.
+  std::uint64_t pattern_version() const { return pattern_version_; }
 
   Index num_nodes() const { return static_cast<Index>(row_begin_.size()) - 1; }
   Index num_blocks() const { return static_cast<Index>(col_.size()); }
@@ -67,13 +87,19 @@ class BlockSparseMatrix {
   void multiply(const VectorX& x, VectorX& y) const;
   /// The scalar diagonal (3 * #nodes).
   VectorX diagonal() const;
-  /// The same matrix as an Eigen compressed sparse matrix (for direct solvers and tests).
+  /// The same matrix as an Eigen compressed sparse matrix (a reference for tests).
   Eigen::SparseMatrix<double> to_sparse() const;
+  /// The scalar pattern of the whole matrix or of its upper triangle.
+  ScalarPattern scalar_pattern(Triangle triangle) const;
+  /// Writes the values in the order of `pattern` (from scalar_pattern() of this pattern) to
+  /// out[0, pattern.col.size()); TBB-parallel over block rows.
+  void scalar_values(const ScalarPattern& pattern, double* out) const;
 
  private:
   std::vector<Index> row_begin_;
   std::vector<Index> col_;
   std::vector<double> values_;
+  std::uint64_t pattern_version_ = 0;
 };
 
 }  // namespace depthfem

@@ -9,6 +9,10 @@ namespace depthfem {
 
 std::string to_string(LinearSolverKind kind) {
   switch (kind) {
+    case LinearSolverKind::kAuto:
+      return "auto";
+    case LinearSolverKind::kAmg:
+      return "amg";
     case LinearSolverKind::kGmres:
       return "gmres";
     case LinearSolverKind::kCg:
@@ -29,16 +33,24 @@ VectorX inverse_diagonal(const BlockSparseMatrix& A) {
 }
 }  // namespace
 
-LinearSolver::LinearSolver(LinearSolverOptions options) : options_(options) {
-  // A failed LL^T is expected past a bifurcation and handled (LDL^T); keep CHOLMOD quiet.
-  llt_.cholmod().print = 0;
-  ldlt_.cholmod().print = 0;
-}
+LinearSolver::LinearSolver(LinearSolverOptions options) : options_(options) {}
 
-LinearSolveStats LinearSolver::solve(const BlockSparseMatrix& A, const VectorX& b, VectorX& x) {
+LinearSolveStats LinearSolver::solve(const BlockSparseMatrix& A, const VectorX& b, VectorX& x,
+                                     const Points* positions) {
   x.setZero(b.size());
   if (b.norm() == 0) return {0, 0.0, true};
   switch (options_.kind) {
+    case LinearSolverKind::kAuto:
+      if (choice_ == Choice::kUndecided) {
+        if (!direct_) direct_ = std::make_unique<DirectSolver>(options_.direct);
+        const double entries = (9.0 * A.num_blocks() + 3.0 * A.num_nodes()) / 2;
+        choice_ = direct_->analyse(A).flops > options_.auto_flops_per_entry * entries
+                      ? Choice::kAmg
+                      : Choice::kDirect;
+      }
+      return choice_ == Choice::kAmg ? amg(A, b, x, positions) : direct(A, b, x);
+    case LinearSolverKind::kAmg:
+      return amg(A, b, x, positions);
     case LinearSolverKind::kGmres:
       return gmres(A, b, x);
     case LinearSolverKind::kCg:
@@ -141,24 +153,31 @@ LinearSolveStats LinearSolver::cg(const BlockSparseMatrix& A, const VectorX& b, 
   return {k, rel, rel <= options_.tolerance};
 }
 
+// Iterations: one per factorisation plus the CG iterations on a kept factor.
 LinearSolveStats LinearSolver::direct(const BlockSparseMatrix& A, const VectorX& b, VectorX& x) {
-  const Eigen::SparseMatrix<double> S = A.to_sparse();
-  if (analysed_blocks_ != A.num_blocks()) {
-    llt_.analyzePattern(S);
-    ldlt_.analyzePattern(S);
-    analysed_blocks_ = A.num_blocks();
-  }
-  llt_.factorize(S);
-  if (llt_.info() == Eigen::Success) {
-    x = llt_.solve(b);
-  } else {
-    ldlt_.factorize(S);
-    if (ldlt_.info() != Eigen::Success) return {1, 1.0, false};
-    x = ldlt_.solve(b);
+  if (!direct_) direct_ = std::make_unique<DirectSolver>(options_.direct);
+  const DirectSolveStats d = direct_->solve(A, b, x);
+  const int iterations = (d.factored ? 1 : 0) + d.cg_iterations;
+  if (!d.success) return {iterations, 1.0, false, d.shift};
+  VectorX Ax;
+  A.multiply(x, Ax);
+  return {iterations, (b - Ax).norm() / b.norm(), true, d.shift};
+}
+
+// CG needs a positive definite matrix; one it fails on (indefinite: deep contact, past a
+// bifurcation) is solved directly.
+LinearSolveStats LinearSolver::amg(const BlockSparseMatrix& A, const VectorX& b, VectorX& x,
+                                   const Points* positions) {
+  if (!amg_) amg_ = std::make_unique<AmgSolver>(options_.amg);
+  const AmgSolveStats s = amg_->solve(A, b, x, positions);
+  if (!s.converged || !x.allFinite()) {
+    LinearSolveStats d = direct(A, b, x);
+    d.iterations += s.iterations;
+    return d;
   }
   VectorX Ax;
   A.multiply(x, Ax);
-  return {1, (b - Ax).norm() / b.norm(), x.allFinite()};
+  return {s.iterations, (b - Ax).norm() / b.norm(), true, 0.0};
 }
 
 }  // namespace depthfem

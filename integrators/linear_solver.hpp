@@ -1,32 +1,41 @@
 #pragma once
 /// Linear solvers for the Newton system behind one interface.
 
-#include <Eigen/CholmodSupport>
 #include <memory>
 #include <string>
 
 #include "core/block_sparse_matrix.hpp"
+#include "integrators/amg_solver.hpp"
+#include "integrators/direct_solver.hpp"
 
 namespace depthfem {
 
 /// Which method solves A x = b.
 enum class LinearSolverKind {
+  kAuto,    ///< direct or AMG-CG by the predicted cost of the factorisation (see LinearSolver)
+  kDirect,  ///< sparse Cholesky (DirectSolver)
+  kAmg,     ///< CG with algebraic multigrid through PETSc (AmgSolver); direct where CG fails
   kGmres,   ///< restarted GMRES, Jacobi (diagonal) preconditioning: the paper's choice
   kCg,      ///< conjugate gradients, Jacobi preconditioning
-  kDirect,  ///< sparse Cholesky (CHOLMOD supernodal LL^T; simplicial LDL^T if indefinite)
 };
 
 /// The scene-file name of a solver kind.
 std::string to_string(LinearSolverKind kind);
 
 struct LinearSolverOptions {
-  LinearSolverKind kind = LinearSolverKind::kDirect;
-  /// Iterative methods stop when |b - A x| <= tolerance |b| (0.1: the paper's tenfold reduction).
+  LinearSolverKind kind = LinearSolverKind::kAuto;
+  /// Jacobi-preconditioned methods stop when |b - A x| <= tolerance |b| (0.1: the paper's
+  /// tenfold reduction).
   double tolerance = 0.1;
-  /// Iteration cap of the iterative methods (GMRES counts inner iterations over restarts).
+  /// Iteration cap of the Jacobi-preconditioned methods (GMRES: inner iterations over restarts).
   int max_iterations = 1000;
   /// GMRES restart length.
   int restart = 50;
+  DirectSolverOptions direct;
+  AmgSolverOptions amg;
+  /// kAuto: AMG-CG when a factorisation would take more flops than this per entry of the
+  /// matrix's lower triangle (the measured crossover, README "Linear solvers").
+  double auto_flops_per_entry = 2e4;
 };
 
 /// What a solve did.
@@ -34,28 +43,35 @@ struct LinearSolveStats {
   int iterations = 0;              ///< iterative: matrix products; direct: 1
   double relative_residual = 0;    ///< |b - A x| / |b|
   bool reached_tolerance = false;  ///< iterative: tolerance met; direct: factorisation succeeded
+  double shift = 0;                ///< direct: s of the factored A + s I (A indefinite)
 };
 
-/// Solves A x = b with the chosen method. The direct method reuses its symbolic analysis while
-/// the matrix pattern (number of blocks) is unchanged. A matrix that is not positive definite
-/// (past a bifurcation) fails the supernodal LL^T; the solver then factors it as LDL^T, which
-/// takes indefinite matrices with nonzero pivots.
+/// Solves A x = b with the chosen method (see DirectSolver and AmgSolver). kAuto decides on the
+/// first matrix: the direct solver's symbolic analysis predicts the flops F of a factorisation,
+/// which grow with the separators of the mesh (a slender bar factors in few flops per entry, a
+/// bulky block in many); a cycle of AMG-CG costs a fixed amount per matrix entry. F above
+/// auto_flops_per_entry times the entries of the lower triangle chooses AMG-CG, and PETSc is
+/// started only then. A matrix that AMG-CG fails on (indefinite) is solved directly.
 class LinearSolver {
  public:
   explicit LinearSolver(LinearSolverOptions options = {});
   const LinearSolverOptions& options() const { return options_; }
-  /// Starts from x = 0. Returns statistics; x holds the best solution found.
-  LinearSolveStats solve(const BlockSparseMatrix& A, const VectorX& b, VectorX& x);
+  /// Starts from x = 0. Returns statistics; x holds the best solution found. `positions`
+  /// (#nodes x 3, current) give AMG its rigid-body modes (without them: translations only).
+  LinearSolveStats solve(const BlockSparseMatrix& A, const VectorX& b, VectorX& x,
+                         const Points* positions = nullptr);
 
  private:
   LinearSolveStats gmres(const BlockSparseMatrix& A, const VectorX& b, VectorX& x) const;
   LinearSolveStats cg(const BlockSparseMatrix& A, const VectorX& b, VectorX& x) const;
   LinearSolveStats direct(const BlockSparseMatrix& A, const VectorX& b, VectorX& x);
+  LinearSolveStats amg(const BlockSparseMatrix& A, const VectorX& b, VectorX& x,
+                       const Points* positions);
 
   LinearSolverOptions options_;
-  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt_;
-  Eigen::CholmodSimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt_;
-  Index analysed_blocks_ = -1;
+  std::unique_ptr<DirectSolver> direct_;  // created on first use
+  std::unique_ptr<AmgSolver> amg_;        // created on first use (starts PETSc and MPI)
+  enum class Choice { kUndecided, kDirect, kAmg } choice_ = Choice::kUndecided;  // kAuto
 };
 
 }  // namespace depthfem

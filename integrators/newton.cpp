@@ -73,8 +73,11 @@ NewtonResult NewtonSolver::solve(Points& x) {
     LinearSolveStats stats;
     {
       PhaseTimers::Scope t(system_.timers(), "linear solve");
-      stats = linear_.solve(H, -g, dx);
+      stats = linear_.solve(H, -g, dx, &x);
     }
+    // An iterative solve is exact on the constrained directions only up to its tolerance (a
+    // multigrid preconditioner couples them with the free ones); keep the step free of them.
+    constraints_.project(dx);
     result.linear_iterations += stats.iterations;
     if (!dx.allFinite()) {
       result.failure = "the linear solver failed (" + to_string(linear_.options().kind) + ")";

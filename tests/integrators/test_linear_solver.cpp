@@ -1,6 +1,7 @@
 // Linear solvers on a clamped elastic block: each reaches what it promises.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <numeric>
 
 #include "core/mesh_generators.hpp"
@@ -76,15 +77,69 @@ TEST(LinearSolver, IterationCapIsHonoured) {
   EXPECT_LT(st.relative_residual, 1.0);  // GMRES never increases the residual
 }
 
-TEST(LinearSolver, DirectSolvesIndefiniteSystems) {
+TEST(LinearSolver, DirectSolvesIndefiniteSystemsExactlyWithLdlt) {
   // Shifting the spectrum makes the matrix indefinite (as past a bifurcation): LL^T fails and
   // the LDL^T fallback must still solve it.
   const Problem p = clamped_block(2e3);
-  LinearSolver direct({LinearSolverKind::kDirect});
+  LinearSolverOptions o{LinearSolverKind::kDirect};
+  o.direct.indefinite = IndefiniteFallback::kLdlt;
+  LinearSolver direct(o);
   VectorX x;
   const LinearSolveStats st = direct.solve(p.A, p.b, x);
   EXPECT_TRUE(st.reached_tolerance);
+  EXPECT_EQ(st.shift, 0.0);
   EXPECT_LE(residual(p.A, x, p.b), 1e-8);
+}
+
+TEST(LinearSolver, DirectShiftsIndefiniteSystemsToADescentDirection) {
+  // The shifted fallback solves (A + s I) x = b with A + s I positive definite, so x is a
+  // descent direction for the quadratic with gradient -b: b.x = x^T (A + s I) x > 0.
+  const Problem p = clamped_block(2e3);
+  LinearSolver direct({LinearSolverKind::kDirect});
+  ASSERT_EQ(direct.options().direct.indefinite, IndefiniteFallback::kShift);
+  VectorX x;
+  const LinearSolveStats st = direct.solve(p.A, p.b, x);
+  ASSERT_GT(st.shift, 0.0);
+  EXPECT_GT(p.b.dot(x), 0.0);
+  VectorX Ax;
+  p.A.multiply(x, Ax);
+  EXPECT_LE((p.b - Ax - st.shift * x).norm(), 1e-10 * p.b.norm());
+  // The shift is less than ten times the least that works: a tenth of it leaves A + s I
+  // indefinite.
+  BlockSparseMatrix shifted = p.A;
+  for (Index i = 0; i < shifted.num_nodes(); ++i)
+    shifted.block(shifted.block_index(i, i)).diagonal().array() += 0.1 * st.shift;
+  LinearSolver probe({LinearSolverKind::kDirect});
+  EXPECT_GT(probe.solve(shifted, p.b, x).shift, 0.0);
+}
+
+// A chain of nodes coupled to the next (pattern 1) or to the one after next (pattern 2), both
+// closed into a ring: the same number of blocks, different blocks. Symmetric, diagonally dominant.
+BlockSparseMatrix ring(Index nodes, Index stride) {
+  SparsityBuilder builder(nodes);
+  for (Index i = 0; i < nodes; ++i) builder.add_clique(std::vector<Index>{i, (i + stride) % nodes});
+  BlockSparseMatrix A(builder);
+  for (Index i = 0; i < nodes; ++i)
+    for (Index k = A.row_begin(i); k < A.row_begin(i + 1); ++k) {
+      const Index j = A.block_col(k);
+      Mat3 B;
+      for (int e = 0; e < 9; ++e) B(e / 3, e % 3) = std::sin(1.0 + std::min(i, j) + 0.1 * e);
+      A.block(k) = i == j ? Mat3(10 * Mat3::Identity()) : (i < j ? B : Mat3(B.transpose()));
+    }
+  return A;
+}
+
+TEST(LinearSolver, DirectAnalysesEveryNewPatternEvenWithTheSameBlockCount) {
+  const BlockSparseMatrix A1 = ring(20, 1), A2 = ring(20, 2);
+  ASSERT_EQ(A1.num_blocks(), A2.num_blocks());
+  const VectorX b = VectorX::LinSpaced(60, -1, 1);
+  LinearSolver direct({LinearSolverKind::kDirect});
+  VectorX x;
+  for (const BlockSparseMatrix* A : {&A1, &A2, &A1}) {
+    const LinearSolveStats st = direct.solve(*A, b, x);
+    EXPECT_TRUE(st.reached_tolerance);
+    EXPECT_LE(residual(*A, x, b), 1e-12);
+  }
 }
 
 }  // namespace

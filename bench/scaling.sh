@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# The scaling study of the linear solvers (README "Linear solvers"): cantilever_gravity (bending)
+# and sliding_blocks (material-depth contact) at five sizes from about 20 k to 1.07 M tets, with
+# each solver, one process per case (bench_scaling appends one CSV row each).
+#   bench/scaling.sh [OUT.csv] [SOLVER ...]     (from the repository root, after building;
+#                                               default solvers: auto direct amg)
+# A case that runs past LIMIT seconds (environment, default 1800) is recorded with success -1.
+set -euo pipefail
+out=${1:-bench/results/scaling.csv}
+shift || true
+solvers=("$@")
+((${#solvers[@]})) || solvers=(auto direct amg)
+limit=${LIMIT:-1800}
+declare -A sizes=([cantilever]="70 100 140 200 260" [sliding]="1.6 2.4 3.4 4.6 6.2")
+for scene in cantilever sliding; do
+  for size in ${sizes[$scene]}; do
+    for solver in "${solvers[@]}"; do
+      status=0
+      timeout "$limit" build/bench/bench_scaling --scene "$scene" --size "$size" \
+        --solver "$solver" --out "$out" || status=$?
+      if ((status == 124)); then
+        echo "$scene,$size,,,$solver,0,-1,,,,$limit,,,,," >> "$out"
+        echo "$scene $size $solver: stopped after $limit s"
+      fi
+    done
+  done
+done

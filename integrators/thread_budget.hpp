@@ -1,0 +1,34 @@
+#pragma once
+/// One bound on the threads of every pool in the process: TBB, OpenMP and BLAS.
+
+#include <tbb/global_control.h>
+
+#include <memory>
+
+namespace depthfem {
+
+/// While alive, at most `threads` threads work at a time. TBB (assembly, products, contact
+/// search) runs at most that many. OpenBLAS, which the direct solver's supernodal factorisation
+/// calls, runs as many in its own pool; that pool and TBB's never work at the same time (the
+/// factorisation waits for the assembly and the reverse). CHOLMOD's OpenMP loops (clearing
+/// and filling supernodes: memory bound, four threads when left alone) run on the calling
+/// thread. With one thread no second thread runs: the pool OpenBLAS starts when it is loaded is
+/// stopped. PETSc (AMG) runs on the calling thread; MPI, which PETSc starts on first use, adds
+/// its own helper threads (Open MPI: two, asleep while a run computes). The command line, the
+/// benchmarks and the tests all set their threads through this.
+class ThreadBudget {
+ public:
+  /// `threads` <= 0: one per core.
+  explicit ThreadBudget(int threads);
+  ~ThreadBudget();
+  ThreadBudget(const ThreadBudget&) = delete;
+  ThreadBudget& operator=(const ThreadBudget&) = delete;
+
+  int threads() const { return threads_; }
+
+ private:
+  int threads_;
+  std::unique_ptr<tbb::global_control> tbb_;
+};
+
+}  // namespace depthfem
