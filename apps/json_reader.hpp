@@ -20,6 +20,8 @@ class JsonObject {
   JsonObject(const nlohmann::json& j, std::string path, std::string file);
 
   bool has(const std::string& key) const { return j_.contains(key); }
+  /// Every key of the object, in the JSON library's order.
+  std::vector<std::string> keys() const;
   double number(const std::string& key);
   double number(const std::string& key, double fallback);
   int integer(const std::string& key);
@@ -31,6 +33,8 @@ class JsonObject {
   Vec3 vec3(const std::string& key, const Vec3& fallback);
   Eigen::Vector3i int3(const std::string& key);
   std::vector<Index> indices(const std::string& key);
+  /// A non-empty array of strings.
+  std::vector<std::string> strings(const std::string& key);
   JsonObject object(const std::string& key);
   std::vector<JsonObject> objects(const std::string& key);
   /// A string key naming one of `names` (the first is the default when the key is absent);

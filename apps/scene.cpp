@@ -1,5 +1,6 @@
 #include "apps/scene.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -10,6 +11,7 @@
 #include "core/error.hpp"
 #include "core/mesh_file.hpp"
 #include "core/mesh_generators.hpp"
+#include "core/mesh_regions.hpp"
 #include "core/node_sets.hpp"
 
 namespace depthfem {
@@ -18,12 +20,22 @@ namespace {
 
 using nlohmann::json;
 
-TetMesh read_body_mesh(JsonObject m, const std::string& scene_dir) {
-  TetMesh mesh;
+// A body's mesh: generated, or read from a file (all of it, or the tets of some regions), with
+// the file's regions and node sets.
+LoadedMesh read_body_mesh(JsonObject m, const std::string& scene_dir) {
+  LoadedMesh loaded;
+  TetMesh& mesh = loaded.mesh;
   if (m.has("file")) {
     std::filesystem::path p = m.string("file");
     if (p.is_relative()) p = std::filesystem::path(scene_dir) / p;
-    mesh = read_tet_mesh(p.string()).mesh;
+    loaded = read_tet_mesh(p.string());
+    if (m.has("regions")) {
+      try {
+        loaded = select_regions(loaded, m.strings("regions"));
+      } catch (const InputError& e) {
+        m.fail("regions", p.string() + ": " + e.what());
+      }
+    }
     mesh.X *= m.number("scale", 1.0);
   } else {
     const std::string gen = m.string("generator");
@@ -45,7 +57,7 @@ TetMesh read_body_mesh(JsonObject m, const std::string& scene_dir) {
   }
   mesh.X.rowwise() += m.vec3("translate", Vec3::Zero()).transpose();
   m.finish();
-  return mesh;
+  return loaded;
 }
 
 // Material parameters by model name; the keys are those of the model's struct.
@@ -84,6 +96,43 @@ MaterialModel read_material(JsonObject m, Vec3& fiber_direction) {
   return out;
 }
 
+// Elastic groups of a deformable body: one material for the whole body ("material"), or one per
+// region of its mesh ("materials": {region: material}).
+void add_material_groups(JsonObject& b, const LoadedMesh& loaded, const Body& body,
+                         std::vector<ElasticGroup>& groups) {
+  const auto group = [&](JsonObject m, Index region) {
+    Vec3 fiber = Vec3::UnitX();
+    ElasticGroup g{read_material(std::move(m), fiber), {}, Points()};
+    for (Index t = 0; t < body.num_tets; ++t)
+      if (region < 0 || loaded.tet_region[t] == region) g.tets.push_back(body.first_tet + t);
+    if (material_uses_fiber(g.material))
+      g.fibers = fiber.transpose().replicate(static_cast<Index>(g.tets.size()), 1);
+    groups.push_back(std::move(g));
+  };
+  if (!b.has("materials")) {
+    group(b.object("material"), -1);
+    return;
+  }
+  if (b.has("material")) b.fail("materials", "give either material or materials, not both");
+  JsonObject ms = b.object("materials");
+  if (loaded.region_names.empty())
+    b.fail("materials", "the body's mesh has no regions (physical volumes); use material");
+  for (const std::string& key : ms.keys()) {
+    if (std::ranges::find(loaded.region_names, key) == loaded.region_names.end()) {
+      std::string known;
+      for (const std::string& r : loaded.region_names)
+        known += (known.empty() ? "'" : ", '") + r + "'";
+      ms.fail(key, "the body has no region '" + key + "' (its regions: " + known + ")");
+    }
+  }
+  for (size_t r = 0; r < loaded.region_names.size(); ++r) {
+    if (!ms.has(loaded.region_names[r]))
+      ms.fail(loaded.region_names[r], "missing material for this region of the body");
+    group(ms.object(loaded.region_names[r]), static_cast<Index>(r));
+  }
+  ms.finish();
+}
+
 std::vector<Index> read_node_set(JsonObject s, const Mesh& mesh) {
   const double tol = s.number("tolerance", 1e-9);
   std::vector<Index> nodes;
@@ -104,16 +153,40 @@ std::vector<Index> read_node_set(JsonObject s, const Mesh& mesh) {
     nodes = s.indices("list");
     ++kinds;
   }
+  if (s.has("set")) {
+    const std::string name = s.string("set");
+    const auto it = mesh.node_sets.find(name);
+    if (it == mesh.node_sets.end()) {
+      std::string known;
+      for (const auto& [n, set] : mesh.node_sets) known += (known.empty() ? "'" : ", '") + n + "'";
+      s.fail("set", "no node set '" + name + "' (the meshes have " +
+                        (known.empty() ? std::string("none") : known) + ")");
+    }
+    nodes = it->second;
+    ++kinds;
+  }
+  // "body" alone selects the whole body; with another selector it keeps that selection's nodes
+  // in the body.
   if (s.has("body")) {
     const std::string name = s.string("body");
     Index id = -1;
     for (size_t b = 0; b < mesh.bodies.size(); ++b)
       if (mesh.bodies[b].name == name) id = static_cast<Index>(b);
     if (id < 0) s.fail("body", "no body named '" + name + "'");
-    nodes = nodes_of_body(mesh, id);
-    ++kinds;
+    if (kinds == 0) {
+      nodes = nodes_of_body(mesh, id);
+      ++kinds;
+    } else {
+      const Body& body = mesh.bodies[id];
+      std::erase_if(nodes, [&](Index i) {
+        return i < body.first_node || i >= body.first_node + body.num_nodes;
+      });
+    }
   }
-  if (kinds != 1) s.fail("", "give exactly one of box, plane, list or body");
+  if (kinds != 1)
+    s.fail("",
+           "give exactly one of box, plane, list, set or body (set and the others may be "
+           "restricted to a body)");
   if (nodes.empty()) s.fail("", "selects no nodes");
   s.finish();
   return nodes;
@@ -320,9 +393,9 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
     const std::string name = b.string("name");
     for (const Body& existing : scene.mesh.bodies)
       if (existing.name == name) b.fail("name", "duplicate body name '" + name + "'");
-    const TetMesh mesh = read_body_mesh(b.object("mesh"), dir);
+    const LoadedMesh loaded = read_body_mesh(b.object("mesh"), dir);
     const bool rigid = b.boolean("rigid", false);
-    const Index id = scene.mesh.add_body(name, mesh);
+    const Index id = scene.mesh.add_body(name, loaded.mesh, loaded.node_sets);
     const Body& body = scene.mesh.bodies[id];
     scene.rigid.push_back(rigid);
     if (rigid) {
@@ -330,13 +403,10 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
       std::vector<Index> nodes(static_cast<size_t>(body.num_nodes));
       for (Index k = 0; k < body.num_nodes; ++k) nodes[k] = body.first_node + k;
       scene.constraints.push_back({name + "_rigid", nodes, Fixed{}});
-      if (b.has("material")) b.fail("material", "a rigid body takes no material");
+      for (const char* key : {"material", "materials"})
+        if (b.has(key)) b.fail(key, "a rigid body takes no material");
     } else {
-      Vec3 fiber = Vec3::UnitX();
-      ElasticGroup g{read_material(b.object("material"), fiber), {}, Points()};
-      for (Index t = 0; t < body.num_tets; ++t) g.tets.push_back(body.first_tet + t);
-      if (material_uses_fiber(g.material)) g.fibers = fiber.transpose().replicate(body.num_tets, 1);
-      scene.groups.push_back(std::move(g));
+      add_material_groups(b, loaded, body, scene.groups);
     }
     const double rho = b.number("density", 1000.0);
     if (!(rho > 0)) b.fail("density", "must be > 0");
