@@ -10,12 +10,14 @@
 
 #include "contact/material_depth.hpp"
 #include "contact/node_to_surface_contact.hpp"
+#include "contact/penetration_depth.hpp"
 #include "core/error.hpp"
 #include "core/lumped_mass.hpp"
 #include "core/results_file.hpp"
 #include "integrators/arkode_stepper.hpp"
 #include "integrators/gravity.hpp"
 #include "integrators/implicit_stepper.hpp"
+#include "integrators/residual_scale.hpp"
 #include "integrators/stiffness_tether.hpp"
 #include "integrators/symplectic_euler.hpp"
 
@@ -25,13 +27,12 @@ namespace {
 
 constexpr const char* kVersion = "0.1.0";
 
-// Newton tolerance [N]: relative tolerance x elastic force scale E h^2 x sqrt(#dofs), i.e. a
-// bound on the root-mean-square nodal residual relative to the force of unit strain on one cell.
-double newton_tolerance(const Scene& scene) {
-  double E = 0;
-  for (const ElasticGroup& g : scene.groups) E = std::max(E, material_moduli(g.material).youngs());
-  const double h = mean_edge_length(scene.mesh.X, scene.mesh.tets);
-  return scene.tolerance * E * h * h * std::sqrt(3.0 * scene.mesh.num_nodes());
+// Newton test: the root mean square over dofs of the residual, each component divided by the
+// force of unit strain on a cell of the stiffest material at its node (residual_force_scale), is
+// at most the scene's relative tolerance.
+void set_newton_tolerance(const Scene& scene, NewtonOptions& newton) {
+  newton.force_scale = residual_force_scale(scene.mesh.X, scene.mesh.tets, scene.groups);
+  newton.tolerance = scene.tolerance * std::sqrt(3.0 * scene.mesh.num_nodes());
 }
 
 std::string format(const char* fmt, auto... args) {
@@ -120,7 +121,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   }
   const Constraints constraints(mesh.X, scene.constraints);
   StaticOptions opt = scene.static_options;
-  opt.newton.tolerance = newton_tolerance(scene);
+  set_newton_tolerance(scene, opt.newton);
 
   std::unique_ptr<ResultsFile> file;
   if (!options.out.empty()) {
@@ -131,7 +132,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   log << "scene " << scene.name << ": " << mesh.num_nodes() << " nodes, " << mesh.num_tets()
       << " tets, " << mesh.bodies.size() << " bodies, " << threads << " threads, linear solver "
       << to_string(opt.newton.linear.kind) << ", Newton tolerance "
-      << format("%.3g", opt.newton.tolerance) << " N\n";
+      << format("%.3g", scene.tolerance) << " x E h^2 per dof\n";
 
   result.x = mesh.X;
   // One completed step (static increment or time step): summary, progress line, results file.
@@ -148,15 +149,18 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     if (contact) {
       sum.contact_area = contact->stats().area;
       sum.contact_force = contact->stats().force;  // the step's gradient was just evaluated at x
+      sum.penetration = deepest_penetration(mesh, x, contact->pairs());
     }
     if (obstacles) {
       sum.contact_area = sum.contact_area.value_or(0) + obstacles->contact_area(x);
       sum.contact_force = sum.contact_force.value_or(0) + obstacles->total_force(x).norm();
     }
-    log << format(
-        "step %4d  %s %.4f%s  newton %2d  linear %5d  residual %.3e  energy % .6e  %.2f s\n",
-        int(index), v ? "time" : "load", load, tag, sum.newton_iterations, sum.linear_iterations,
-        sum.residual, sum.energy, seconds);
+    log << format("step %4d  %s %.4f%s  newton %2d  linear %5d  residual %.3e  energy % .6e",
+                  int(index), v ? "time" : "load", load, tag, sum.newton_iterations,
+                  sum.linear_iterations, sum.residual, sum.energy)
+        << (sum.penetration ? format("  penetration %.3f mm", 1e3 * *sum.penetration) : "")
+        << format("  %.2f s\n", seconds);
+    log.flush();  // one line per step even when the log is a file
     if (file) {
       StepRecord rec;
       rec.index = index;
@@ -171,7 +175,9 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
       rec.reactions = sum.reactions;
       rec.contact_area = sum.contact_area;
       rec.contact_force = sum.contact_force;
+      rec.penetration = sum.penetration;
       file->append_step(rec);
+      file->write_timing(result.timers.phases());  // a run killed later keeps its timing so far
     }
     result.steps.push_back(std::move(sum));
   };
@@ -179,6 +185,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     if (time_dependent) {
       DynamicOptions dyn = dyn_in;
       dyn.newton.tolerance = opt.newton.tolerance;
+      dyn.newton.force_scale = opt.newton.force_scale;
       Points v = scene.initial_velocity;
       const auto on_step = [&](const DynamicStep& s) {
         NewtonResult newton =

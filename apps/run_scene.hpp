@@ -30,6 +30,7 @@ struct StepSummary {
   Eigen::Matrix<double, Eigen::Dynamic, 3> reactions;  ///< per boundary condition [N]
   std::optional<double> contact_area;                  ///< [m^2], with contact or obstacles
   std::optional<double> contact_force;  ///< [N]: obstacle force + sum over pairs of |pair force|
+  std::optional<double> penetration;    ///< [m] deepest geometric penetration (contact pairs)
   double kinetic_energy = 0;            ///< dynamic runs: sum m |v|^2 / 2 [J]
   double potential_energy = 0;          ///< dynamic runs: E(x) without inertia and damping [J]
 };

@@ -20,6 +20,18 @@ std::array<Vec3, 4> tet_corners(const Points& x, const TetIndices& tets, Index t
 std::array<Vec3, 3> tri_corners(const Points& x, const TriIndices& tris, Index f) {
   return {x.row(tris(f, 0)), x.row(tris(f, 1)), x.row(tris(f, 2))};
 }
+
+// True when some fan triangle of the polygon counts (fan_triangle_counts). A polygon without one
+// (a triangle touching a tet along an edge or at a point, as where bodies rest on each other)
+// adds nothing to the energy or its derivatives, so it is not kept as a pair: it would only
+// cost clipping, integration and couplings in the Hessian pattern.
+bool has_area(const ClipPolygon& poly, double min_area2) {
+  for (int k = 1; k + 1 < poly.size; ++k) {
+    const Vec3 c = (poly.x[k] - poly.x[0]).cross(poly.x[k + 1] - poly.x[0]);
+    if (fan_triangle_counts(c.squaredNorm(), min_area2)) return true;
+  }
+  return false;
+}
 }  // namespace
 
 MaterialDepthContact::MaterialDepthContact(const Mesh& mesh, VectorX depth, ContactOptions options)
@@ -64,7 +76,7 @@ void MaterialDepthContact::prepare(const Points& x) {
         }
         ++candidates[c];
         ClipPolygon poly = clip_triangle_by_tet(tet_corners(x, tets_, t), Q);
-        if (poly.size >= 3) found[c].push_back({f, t, poly});
+        if (poly.size >= 3 && has_area(poly, min_area2_)) found[c].push_back({f, t, poly});
       });
     }
   });
@@ -75,11 +87,6 @@ void MaterialDepthContact::prepare(const Points& x) {
     stats_.candidates += candidates[c];
   }
   stats_.active = static_cast<Index>(pairs_.size());
-  for (const ContactPair& p : pairs_) {
-    for (int k = 1; k + 1 < p.polygon.size; ++k)
-      stats_.area +=
-          0.5 * (p.polygon.x[k] - p.polygon.x[0]).cross(p.polygon.x[k + 1] - p.polygon.x[0]).norm();
-  }
   // A pair whose nodes are not coupled in the bound pattern needs a new pattern.
   pattern_changed_ = false;
   if (bound_) {
@@ -149,9 +156,17 @@ double MaterialDepthContact::evaluate(const Points& x, VectorX* gradient,
   });
   double energy = 0;
   stats_.force = 0;
+  stats_.area = 0;
   for (Index k = 0; k < n; ++k) {
     const std::array<Index, 7> v = pair_nodes(pairs_[k]);
     energy += energies[k];
+    // A polygon with zero depth everywhere (a surface resting on another, a bonded interface)
+    // touches but does not press.
+    if (energies[k] > 0) {
+      const ClipPolygon& p = pairs_[k].polygon;
+      for (int j = 1; j + 1 < p.size; ++j)
+        stats_.area += 0.5 * (p.x[j] - p.x[0]).cross(p.x[j + 1] - p.x[0]).norm();
+    }
     stats_.force += gradients[k].tail<9>().reshaped(3, 3).rowwise().sum().norm();
     for (int a = 0; a < 7; ++a) gradient->segment<3>(3 * v[a]) += gradients[k].segment<3>(3 * a);
     if (!hessian) continue;

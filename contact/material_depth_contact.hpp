@@ -24,13 +24,14 @@ struct ContactPair {
   ClipPolygon polygon;
 };
 
-/// What the active pairs amount to at the last prepare() (and evaluate(), for the force).
+/// What the active pairs amount to at the last prepare() (candidates, active) and the last
+/// evaluation with a gradient (area, force).
 struct ContactStats {
   Index candidates = 0;  ///< triangle-tet pairs whose boxes overlap
-  Index active = 0;      ///< pairs with an intersection polygon
-  double area = 0;       ///< total intersection area [m^2]
-  double force = 0;      ///< sum over pairs of |penalty force on the triangle| [N], from the
-                         ///< last evaluation with a gradient
+  Index active = 0;      ///< pairs with an intersection polygon of non-zero area
+  double area = 0;       ///< intersection area of the pairs that press (positive energy: some
+                         ///< depth inside the tet) [m^2]
+  double force = 0;      ///< sum over pairs of |penalty force on the triangle| [N]
 };
 
 /// The contact force module. Geometry (tree, clipping, depth lookup) lives in aabb_tree, clip

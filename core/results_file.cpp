@@ -2,6 +2,7 @@
 
 #include <hdf5.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cstdio>
 #include <filesystem>
@@ -446,6 +447,15 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
   std::vector<std::string> body_names;
   for (const Body& body : mesh.bodies) body_names.push_back(body.name);
   f.write_strings("/mesh/body_names", body_names);
+  if (!mesh.node_sets.empty()) {
+    f.create_group("/mesh/node_sets");
+    for (const auto& [name, nodes] : mesh.node_sets) {
+      std::string object = name;  // '/' would open a subgroup
+      std::ranges::replace(object, '/', '_');
+      f.write_array("/mesh/node_sets/" + object,
+                    Eigen::Map<const IndexVector>(nodes.data(), Eigen::Index(nodes.size())));
+    }
+  }
 
   f.create_group("/run");
   f.set_string_attribute("/run", "scene", info.scene_json);
@@ -490,6 +500,7 @@ void ResultsFile::append_step(const StepRecord& step) {
   f.set_attribute(group, "seconds", step.seconds);
   if (step.contact_area) f.set_attribute(group, "contact_area", *step.contact_area);
   if (step.contact_force) f.set_attribute(group, "contact_force", *step.contact_force);
+  if (step.penetration) f.set_attribute(group, "penetration", *step.penetration);
   f.write_array(group + "/x", *step.x);
   if (step.v) f.write_array(group + "/v", *step.v);
   f.write_array(

@@ -5,11 +5,13 @@
 /// Layout (datasets row-major; strings variable-length UTF-8):
 ///   /mesh/X (#nodes x 3 f64 [m]), /mesh/tets (#tets x 4 i32), /mesh/tris (#tris x 3 i32),
 ///   /mesh/tet_body (#tets i32), /mesh/tri_body (#tris i32), /mesh/depth (#nodes f64 [m]),
-///   /mesh/body_names (#bodies strings);
+///   /mesh/body_names (#bodies strings), /mesh/node_sets/NAME (named node sets, i32 node indices;
+///   a '/' in NAME is written '_');
 ///   /run attributes scene, version, threads, analysis, status ("running", "completed", "failed"),
 ///   message, and dataset /run/constraint_names (#constraints strings);
 ///   /steps/NNNNNN (6-digit step index) attributes index, load, newton_iterations,
-///   linear_iterations, energy [J], seconds, optional contact_area [m^2] and contact_force [N],
+///   linear_iterations, energy [J], seconds, optional contact_area [m^2], contact_force [N] and
+///   penetration [m],
 ///   datasets x (#nodes x 3 f64 [m]), optional v (#nodes x 3 f64 [m/s]), residuals (one norm per
 ///   Newton iteration), reactions (#constraints x 3 f64 [N]);
 ///   /timing attributes, one f64 [s] per phase, in the order given.
@@ -37,6 +39,7 @@ struct StepRecord {
   Eigen::Matrix<double, Eigen::Dynamic, 3> reactions;  ///< #constraints x 3 constraint forces [N]
   std::optional<double> contact_area;                  ///< [m^2], written only when set
   std::optional<double> contact_force;                 ///< [N], written only when set
+  std::optional<double> penetration;  ///< deepest penetration [m], written only when set
 };
 
 /// Metadata of a run written to /run at creation.

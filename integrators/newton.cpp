@@ -4,6 +4,10 @@
 
 namespace depthfem {
 
+double scaled_residual(const NewtonOptions& options, const VectorX& g) {
+  return options.force_scale.size() == 0 ? g.norm() : g.cwiseQuotient(options.force_scale).norm();
+}
+
 bool NewtonSolver::line_search(Points& x, const Points& step, double energy, double residual) {
   VectorX g_trial;
   double alpha = 1.0;
@@ -43,14 +47,17 @@ NewtonResult NewtonSolver::solve(Points& x) {
   result.residuals.push_back(residual);
   for (;;) {
     result.energy = energy;
-    if (residual <= options_.tolerance) {
+    const double scaled = scaled_residual(options_, g);
+    if (scaled <= options_.tolerance) {
       result.converged = true;
       return result;
     }
     if (result.iterations == options_.max_iterations) {
-      result.failure = "no convergence in " + std::to_string(options_.max_iterations) +
-                       " Newton iterations (residual " + std::to_string(residual) +
-                       " N, tolerance " + std::to_string(options_.tolerance) + " N)";
+      result.failure =
+          "no convergence in " + std::to_string(options_.max_iterations) +
+          " Newton iterations (residual " + std::to_string(residual) + " N, " +
+          (options_.force_scale.size() ? "scaled " + std::to_string(scaled) + ", " : "") +
+          "tolerance " + std::to_string(options_.tolerance) + ")";
       return result;
     }
     BlockSparseMatrix& H = system_.matrix();

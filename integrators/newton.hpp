@@ -19,12 +19,20 @@ enum class LineSearchRule {
 struct NewtonOptions {
   int max_iterations = 30;
   LineSearchRule line_search = LineSearchRule::kEnergy;
-  /// Converged when |P grad E|_2 <= tolerance [N] (P: projection onto free directions).
+  /// Converged when |P grad E ./ force_scale|_2 <= tolerance (P: projection onto free
+  /// directions); with an empty force_scale, |P grad E|_2 <= tolerance [N].
   double tolerance = 1e-8;
+  /// Per dof (3 * #nodes) [N]: the force each residual component is measured against (see
+  /// residual_force_scale), or empty.
+  VectorX force_scale;
   /// Step halvings before the line search gives up.
   int max_line_search = 30;
   LinearSolverOptions linear;
 };
+
+/// The norm of a (projected) residual that the Newton test compares with options.tolerance:
+/// |g ./ force_scale|_2, or |g|_2 without a scale.
+double scaled_residual(const NewtonOptions& options, const VectorX& g);
 
 /// How one Newton solve went.
 struct NewtonResult {

@@ -97,7 +97,7 @@ void StaticSolver::run(Points& x, const std::function<void(const StaticStep&)>& 
     viscosity_->set_anchor(before);
     viscosity_->evaluate(x, &viscous, nullptr);
     constraints_.project(viscous);
-    if (viscous.norm() <= options_.newton.tolerance) return;
+    if (scaled_residual(options_.newton, viscous) <= options_.newton.tolerance) return;
     scale = std::max(scale / 2, 1e-12);
   }
   throw SolveError("the body did not come to rest in " + std::to_string(options_.max_settle_steps) +
