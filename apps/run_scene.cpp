@@ -132,7 +132,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   log << "scene " << scene.name << ": " << mesh.num_nodes() << " nodes, " << mesh.num_tets()
       << " tets, " << mesh.bodies.size() << " bodies, " << threads << " threads, linear solver "
       << to_string(opt.newton.linear.kind) << ", Newton tolerance "
-      << format("%.3g", scene.tolerance) << " x E h^2 per dof\n";
+      << format("%.3g", scene.tolerance) << " x E h^2 per dof" << std::endl;
 
   result.x = mesh.X;
   // One completed step (static increment or time step): summary, progress line, results file.

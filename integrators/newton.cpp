@@ -33,6 +33,23 @@ bool NewtonSolver::line_search(Points& x, const Points& step, double energy, dou
   return false;
 }
 
+Points NewtonSolver::linearised_step(const Points& x, const Points& u) {
+  VectorX g, Hu, dx;
+  system_.prepare(x);
+  system_.hessian(x, g);
+  BlockSparseMatrix& H = system_.matrix();
+  H.multiply(as_dofs(u), Hu);
+  VectorX rhs = -(g + Hu);
+  constraints_.project(rhs);
+  constraints_.project(H);
+  {
+    PhaseTimers::Scope t(system_.timers(), "linear solve");
+    linear_.solve(H, rhs, dx);
+  }
+  constraints_.project(dx);  // an inexact solve may leak into the prescribed directions
+  return x + u + as_points(dx);
+}
+
 NewtonResult NewtonSolver::solve(Points& x) {
   NewtonResult result;
   VectorX g, dx;

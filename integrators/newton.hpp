@@ -60,6 +60,12 @@ class NewtonSolver {
   /// Solves in place from x, whose constrained components must already hold their targets.
   NewtonResult solve(Points& x);
 
+  /// A first guess for a new load increment: from the (legal) state x, the prescribed motion u
+  /// (#nodes x 3, zero in the free directions) carried into the free directions by the stiffness
+  /// at x, dx = -(P H P + C)^-1 P (g + H u); returns x + u + dx. Where imposing u alone would
+  /// invert the elements beside the moved nodes, this spreads the motion over the body.
+  Points linearised_step(const Points& x, const Points& u);
+
   NewtonOptions& options() { return options_; }
 
  private:

@@ -32,12 +32,21 @@ void StaticSolver::run(Points& x, const std::function<void(const StaticStep&)>& 
     if (viscosity_) viscosity_->set_anchor(x);
     system_.begin_step(x, target);
     system_.prepare(trial);
-    if (!std::isfinite(system_.energy(trial))) {  // predictor (or boundary motion) inverted a tet
-      trial = x;
+    // An illegal trial (the predictor, or the prescribed motion alone, inverts a tet): carry
+    // the prescribed motion into the body by the stiffness at x, else give up on the increment.
+    if (!std::isfinite(system_.energy(trial))) {
+      Points moved = x;
+      constraints_.impose(target, moved);
+      trial = newton_.linearised_step(x, moved - x);
       constraints_.impose(target, trial);
+      system_.prepare(trial);
       if (!std::isfinite(system_.energy(trial))) {
-        last_failure = "prescribed motion inverts an element";
-        return false;
+        trial = moved;
+        system_.prepare(trial);
+        if (!std::isfinite(system_.energy(trial))) {
+          last_failure = "prescribed motion inverts an element";
+          return false;
+        }
       }
     }
     NewtonResult r = newton_.solve(trial);
