@@ -20,11 +20,16 @@ double deepest_penetration(const Mesh& mesh, const Points& x,
     const Body& body = mesh.bodies[b];
     trees[b] = AabbTree(triangle_boxes(x, mesh.tris.middleRows(body.first_tri, body.num_tris)));
   }
-  const auto shares_node = [&](Index f, Index g) {
+  const auto normal = [&](Index f) -> Vec3 {
+    const Vec3 a = x.row(mesh.tris(f, 0)), b = x.row(mesh.tris(f, 1)), c = x.row(mesh.tris(f, 2));
+    return (b - a).cross(c - a);
+  };
+  // f's own neighbourhood: the triangles that share a node with it and face the same way.
+  const auto beside = [&](Index f, Index g) {
+    bool shares = false;
     for (int a = 0; a < 3; ++a)
-      for (int c = 0; c < 3; ++c)
-        if (mesh.tris(f, a) == mesh.tris(g, c)) return true;
-    return false;
+      for (int c = 0; c < 3; ++c) shares = shares || mesh.tris(f, a) == mesh.tris(g, c);
+    return shares && normal(f).dot(normal(g)) > 0;
   };
   const Index n = static_cast<Index>(pairs.size());
   return tbb::parallel_reduce(
@@ -40,7 +45,7 @@ double deepest_penetration(const Mesh& mesh, const Points& x,
             double best = std::numeric_limits<double>::infinity();
             trees[b].nearest(q, best, [&](Index local, double bound) {
               const Index f = body.first_tri + local;
-              if (self && shares_node(f, p.tri)) return bound;
+              if (self && beside(f, p.tri)) return bound;
               const Vec3 c = closest_point_on_triangle(
                   q, x.row(mesh.tris(f, 0)), x.row(mesh.tris(f, 1)), x.row(mesh.tris(f, 2)));
               best = std::min(bound, (c - q).squaredNorm());

@@ -11,8 +11,10 @@ namespace depthfem {
 
 /// Deepest geometric penetration [m] at positions x (#nodes x 3): over the intersection polygons
 /// of `pairs` (clipped at x), the largest distance from a polygon vertex to the current boundary
-/// surface of the body whose tet it lies in. For self-contact the boundary triangles sharing a
-/// node with the pair's own triangle are skipped (the vertex lies on them). 0 without pairs.
+/// surface of the body whose tet it lies in. For self-contact, the vertex lies on its own
+/// triangle's surface, so the triangles that share a node with that triangle and face the same
+/// way (its own side of a fold) are skipped; the rest of that side lies at least an edge away.
+/// 0 without pairs.
 double deepest_penetration(const Mesh& mesh, const Points& x,
                            const std::vector<ContactPair>& pairs);
 

@@ -18,8 +18,8 @@ std::vector<ContactPair> pairs_at(const Mesh& m, const Points& x, bool self_cont
 }
 
 // A narrower box pushed d into a wider one: its bottom face lies d below the lower box's top
-// face and more than d from its sides, so the deepest penetration is d exactly; the corners of
-// the lower box's top face inside the upper box lie d above the upper box's bottom face.
+// face and more than d from its sides, so the deepest penetration is d exactly; the lower box's
+// top face inside the upper box lies d above the upper box's bottom face.
 TEST(PenetrationDepth, BoxPushedIntoABoxPenetratesByItsDisplacement) {
   Mesh m;
   m.add_body("low", box_mesh({Vec3(0, 0, 0), Vec3(1, 1, 0.4), Eigen::Vector3i(5, 5, 2)}));
@@ -34,12 +34,13 @@ TEST(PenetrationDepth, BoxPushedIntoABoxPenetratesByItsDisplacement) {
   }
 }
 
-// A slab folded back onto itself through its own material: the free end's lower face is pushed
-// d into the part below it. Self-contact must measure d, not the zero distance to the surface
-// the penetrating point lies on.
+// A slab folded back onto itself through its own material: the upper arm's lower face is pushed
+// d into the lower arm. Self-contact must measure d to the lower arm's top face, not the zero
+// distance to the face the penetrating point lies on.
 TEST(PenetrationDepth, SelfContactMeasuresToTheOtherSideOfTheFold) {
-  // A U-shaped body: two arms (z in [0, 0.1] and [0.3, 0.4]) joined at x in [0.8, 1].
-  TetMesh slab = box_mesh({Vec3(0, 0, 0), Vec3(1, 0.2, 0.4), Eigen::Vector3i(10, 2, 4)});
+  // A U-shaped body: two arms (z in [0, 0.1] and [0.3, 0.4], two cells thick, so that their
+  // middle nodes have depth) joined at x in [0.8, 1].
+  TetMesh slab = box_mesh({Vec3(0, 0, 0), Vec3(1, 0.2, 0.4), Eigen::Vector3i(10, 2, 8)});
   // Keep the tets outside the gap x < 0.8, 0.1 < z < 0.3.
   std::vector<Index> keep;
   for (Index t = 0; t < slab.tets.rows(); ++t) {
