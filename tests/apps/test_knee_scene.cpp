@@ -1,6 +1,6 @@
 // The knee-flexion scene (apps/scenes/knee_flexion.json), shortened to its first small steps on
-// the paper-size mesh: the scene loads as meant (bodies, regions, node sets, conditions), every step
-// converges, no tet inverts, and the deepest penetration stays below the scene's 1 mm target.
+// the paper-size mesh: the scene loads as meant (bodies, regions, node sets, conditions), every
+// step converges, no tet inverts, and the deepest penetration stays below the scene's 1 mm target.
 #include <gtest/gtest.h>
 
 #include <sstream>
@@ -56,6 +56,20 @@ TEST(KneeScene, FineVariantDiffersOnlyInItsMesh) {
     EXPECT_EQ(fine.constraints[k].name, coarse.constraints[k].name);
   EXPECT_EQ(fine.contact_options.penalty, coarse.contact_options.penalty);
   EXPECT_EQ(fine.groups.size(), coarse.groups.size());
+}
+
+// The Veronda variant: the same scene with the soft tissue's model swapped, at the same
+// small-strain moduli (shear 10 kPa, Poisson's ratio 0.452).
+TEST(KneeScene, VerondaVariantHasTheMooneyRivlinSmallStrainModuli) {
+  const Scene mr = load("knee_flexion"), veronda = load("knee_flexion_veronda");
+  ASSERT_TRUE(std::holds_alternative<Veronda>(veronda.groups[0].material));
+  const LinearizedModuli a = material_moduli(mr.groups[0].material);
+  const LinearizedModuli b = material_moduli(veronda.groups[0].material);
+  EXPECT_NEAR(a.mu, 1e4, 1e-6);
+  EXPECT_NEAR(b.mu, 1e4, 1e-6);
+  EXPECT_NEAR(a.poisson(), 0.45, 5e-3);
+  EXPECT_NEAR(b.poisson(), a.poisson(), 1e-5);
+  EXPECT_EQ(veronda.mesh.num_tets(), mr.mesh.num_tets());
 }
 
 // Three steps of 0.5 degrees (the full run's steps of 3 degrees take minutes each on the first
