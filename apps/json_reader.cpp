@@ -236,6 +236,17 @@ std::vector<Index> JsonObject::indices(const std::string& key) {
   return out;
 }
 
+std::vector<std::string> JsonObject::strings(const std::string& key) {
+  const nlohmann::json& v = at(key);
+  if (!v.is_array() || v.empty()) fail(key, "expected a non-empty array of strings");
+  std::vector<std::string> out;
+  for (const auto& e : v) {
+    if (!e.is_string()) fail(key, "expected an array of strings, found " + e.dump());
+    out.push_back(e.get<std::string>());
+  }
+  return out;
+}
+
 JsonObject JsonObject::object(const std::string& key) {
   const nlohmann::json& v = at(key);
   if (!v.is_object()) fail(key, "expected an object, found " + shown(v));
@@ -252,6 +263,12 @@ std::vector<JsonObject> JsonObject::objects(const std::string& key) {
       throw InputError(file_ + ": " + p + ": expected an object, found " + shown(v[k]));
     out.emplace_back(v[k], p, file_);
   }
+  return out;
+}
+
+std::vector<std::string> JsonObject::keys() const {
+  std::vector<std::string> out;
+  for (auto it = j_.begin(); it != j_.end(); ++it) out.push_back(it.key());
   return out;
 }
 

@@ -33,6 +33,8 @@ class JsonObject {
   JsonObject(const nlohmann::json& j, std::string path, std::string file);
 
   bool has(const std::string& key) const { return j_.contains(key); }
+  /// Every key of the object, in the JSON library's order.
+  std::vector<std::string> keys() const;
   double number(const std::string& key);
   double number(const std::string& key, double fallback);
   /// An integer that fits an int; larger ones are refused, never truncated.
@@ -46,6 +48,8 @@ class JsonObject {
   Eigen::Vector3i int3(const std::string& key);
   /// An array of node indices, each in [0, 2^31).
   std::vector<Index> indices(const std::string& key);
+  /// A non-empty array of strings.
+  std::vector<std::string> strings(const std::string& key);
   JsonObject object(const std::string& key);
   std::vector<JsonObject> objects(const std::string& key);
   /// A string key naming one of `names` (the first is the default when the key is absent);

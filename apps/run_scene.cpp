@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "apps/scene_model.hpp"
+#include "contact/penetration_depth.hpp"
 #include "core/error.hpp"
 #include "core/results_file.hpp"
 #include "integrators/arkode_stepper.hpp"
@@ -102,15 +103,22 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   log << "scene " << scene.name << ": " << mesh.num_nodes() << " nodes, " << mesh.num_tets()
       << " tets, " << mesh.bodies.size() << " bodies, " << threads << " threads, linear solver "
       << to_string(model->static_options.newton.linear.kind) << ", Newton tolerance "
-      << format("%.3g", model->static_options.newton.tolerance) << " N\n";
+      << format("%.3g", scene.tolerance) << " x E h^2 per dof" << std::endl;
 
   // Drive: every completed step is printed, written and kept.
-  const auto on_step = [&](const StepRecord& step, const Points& x, const Points* v) {
-    log << format(
-        "step %4d  %s %.4f%s  newton %2d  linear %5d  residual %.3e  energy % .6e  %.2f s\n",
-        int(step.index), v ? "time" : "load", step.load, step.settling ? " (settle)" : "",
-        step.newton_iterations, step.linear_iterations, step.residuals.back(), step.energy,
-        step.seconds);
+  const auto on_step = [&](const StepRecord& done, const Points& x, const Points* v) {
+    StepRecord step = done;
+    if (model->contact) {
+      PhaseTimers::Scope t(result.timers, "output: penetration");
+      step.penetration = deepest_penetration(mesh, x, model->contact->pairs());
+    }
+    log << format("step %4d  %s %.4f%s  newton %2d  linear %5d  residual %.3e  energy % .6e",
+                  int(step.index), v ? "time" : "load", step.load, step.settling ? " (settle)" : "",
+                  step.newton_iterations, step.linear_iterations, step.residuals.back(),
+                  step.energy)
+        << (step.penetration ? format("  penetration %.3f mm", 1e3 * *step.penetration) : "")
+        << format("  %.2f s\n", step.seconds);
+    log.flush();  // one line per step even when the log is a file
     if (file) {
       ElementFields elements;
       if (fields.stress || fields.strain) {
@@ -120,6 +128,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
       }
       PhaseTimers::Scope t(result.timers, "output: results file");
       file->append_step(step, x, v, &elements);
+      file->write_timing(result.timers.phases());  // a run killed later keeps its timing so far
     }
     result.steps.push_back(step);
     if (options.observer) options.observer(step, x);

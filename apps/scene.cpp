@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -20,6 +21,7 @@
 #include "core/lumped_mass.hpp"
 #include "core/mesh_file.hpp"
 #include "core/mesh_generators.hpp"
+#include "core/mesh_regions.hpp"
 #include "core/node_sets.hpp"
 #include "core/results_file.hpp"
 
@@ -39,6 +41,7 @@ std::string number_text(double value) {
 // A body's mesh as the scene describes it, checked but not yet generated or read.
 struct MeshSpec {
   std::variant<std::string, BoxParams, TubeParams, BallParams, CornerParams> source;  // file path
+  std::vector<std::string> regions;  // of a file: the element regions to keep (empty: all)
   double scale = 1;
   Vec3 translate = Vec3::Zero();
 };
@@ -60,6 +63,7 @@ MeshSpec read_mesh_spec(JsonObject m, const std::string& scene_dir, MeshCounts& 
     std::filesystem::path p = m.string("file");
     if (p.is_relative()) p = std::filesystem::path(scene_dir) / p;
     spec.source = p.string();
+    if (m.has("regions")) spec.regions = m.strings("regions");
     spec.scale = m.number("scale", 1.0);
     if (!(spec.scale > 0)) m.fail("scale", "must be > 0");
   } else {
@@ -86,32 +90,39 @@ MeshSpec read_mesh_spec(JsonObject m, const std::string& scene_dir, MeshCounts& 
   return spec;
 }
 
-// Generates or reads the mesh of a checked spec; every error names the scene key `m` too.
-TetMesh make_mesh(const MeshSpec& spec, const JsonObject& m) {
+// Generates or reads the mesh of a checked spec (of a file: the regions asked for, with the
+// file's regions and node sets); every error names the scene key `m` too.
+LoadedMesh make_mesh(const MeshSpec& spec, const JsonObject& m) {
   try {
-    TetMesh mesh = std::visit(
-        [](const auto& source) -> TetMesh {
+    LoadedMesh loaded = std::visit(
+        [&](const auto& source) -> LoadedMesh {
           using S = std::decay_t<decltype(source)>;
           if constexpr (std::is_same_v<S, std::string>) {
-            return read_tet_mesh(source).mesh;
+            if (spec.regions.empty()) return read_tet_mesh(source);
+            try {
+              return select_regions(read_tet_mesh(source), spec.regions);
+            } catch (const InputError& e) {
+              m.fail("regions", source + ": " + e.what());
+            }
           } else if constexpr (std::is_same_v<S, BoxParams>) {
-            return box_mesh(source);
+            return {box_mesh(source)};
           } else if constexpr (std::is_same_v<S, TubeParams>) {
-            return tube_mesh(source);
+            return {tube_mesh(source)};
           } else if constexpr (std::is_same_v<S, BallParams>) {
-            return ball_mesh(source);
+            return {ball_mesh(source)};
           } else {
-            return corner_mesh(source);
+            return {corner_mesh(source)};
           }
         },
         spec.source);
+    TetMesh& mesh = loaded.mesh;
     if (spec.scale != 1 || spec.translate != Vec3::Zero()) {
       // Scaling or moving far can underflow or overflow coordinates: check the mesh again.
       mesh.X *= spec.scale;
       mesh.X.rowwise() += spec.translate.transpose();
       validate_and_orient(mesh, {"the scaled and translated mesh"});
     }
-    return mesh;
+    return loaded;
   } catch (const InputError& e) {
     m.fail("", e.what());
   }
@@ -173,16 +184,78 @@ MaterialModel read_material(JsonObject m, Vec3& fiber_direction) {
   return out;
 }
 
+// A body's materials: one for the whole body (region empty) or one per element region.
+struct BodyMaterial {
+  std::string region;
+  MaterialModel model;
+  Vec3 fiber = Vec3::UnitX();
+  std::string path;  // the scene key, for messages
+};
+
+// Reads "material" (one for the whole body) or "materials" ({region: material}); the region
+// names are checked against the mesh once it is read (region_materials_checked).
+std::vector<BodyMaterial> read_body_materials(JsonObject& b) {
+  std::vector<BodyMaterial> out;
+  if (!b.has("materials")) {
+    const JsonObject m = b.object("material");
+    BodyMaterial& one = out.emplace_back();
+    one.model = read_material(m, one.fiber);
+    one.path = m.path();
+    return out;
+  }
+  if (b.has("material")) b.fail("materials", "give either material or materials, not both");
+  JsonObject ms = b.object("materials");
+  for (const std::string& region : ms.keys()) {
+    const JsonObject m = ms.object(region);
+    BodyMaterial& one = out.emplace_back();
+    one.region = region;
+    one.model = read_material(m, one.fiber);
+    one.path = m.path();
+  }
+  if (out.empty()) b.fail("materials", "names no region");
+  ms.finish();
+  return out;
+}
+
+// The body's materials in the order of the mesh's regions (one for the whole body as given):
+// every region of the mesh needs one, and every material a region of the mesh.
+std::vector<BodyMaterial> region_materials_checked(const std::vector<BodyMaterial>& materials,
+                                                   const LoadedMesh& loaded, const JsonObject& b) {
+  if (materials.size() == 1 && materials[0].region.empty()) return materials;
+  if (loaded.region_names.empty())
+    b.fail("materials", "the body's mesh has no regions (physical volumes); use material");
+  std::string known;
+  for (const std::string& r : loaded.region_names) known += (known.empty() ? "'" : ", '") + r + "'";
+  for (const BodyMaterial& m : materials)
+    if (std::ranges::find(loaded.region_names, m.region) == loaded.region_names.end())
+      b.fail("materials." + m.region,
+             "the body has no region '" + m.region + "' (its regions: " + known + ")");
+  std::vector<BodyMaterial> ordered;
+  for (const std::string& r : loaded.region_names) {
+    const auto it = std::ranges::find(materials, r, &BodyMaterial::region);
+    if (it == materials.end())
+      b.fail("materials." + r, "missing material for this region of the body");
+    ordered.push_back(*it);
+  }
+  return ordered;
+}
+
 // A node set as the scene describes it; the nodes are selected once the meshes exist.
 struct NodeSetSpec {
+  struct SetName {
+    std::string name;
+  };
   JsonObject where;
-  std::variant<std::pair<Vec3, Vec3>, std::pair<Vec3, double>, std::vector<Index>, std::string>
-      selector;  // box (lo, hi), plane (normal, offset), list, body name
+  // box (lo, hi), plane (normal, offset), list, a node set of the mesh files; none: "body" alone
+  std::variant<std::monostate, std::pair<Vec3, Vec3>, std::pair<Vec3, double>, std::vector<Index>,
+               SetName>
+      selector;
+  std::string body;  // the whole body alone, or the body the selection is restricted to
   double tolerance = 1e-9;
 };
 
 NodeSetSpec read_node_set(JsonObject s) {
-  NodeSetSpec spec{s, {}, s.number("tolerance", 1e-9)};
+  NodeSetSpec spec{s, {}, {}, s.number("tolerance", 1e-9)};
   if (!(spec.tolerance >= 0)) s.fail("tolerance", "must be >= 0");
   int kinds = 0;
   if (s.has("box")) {
@@ -203,11 +276,15 @@ NodeSetSpec read_node_set(JsonObject s) {
     spec.selector = s.indices("list");
     ++kinds;
   }
-  if (s.has("body")) {
-    spec.selector = s.string("body");
+  if (s.has("set")) {
+    spec.selector = NodeSetSpec::SetName{s.string("set")};
     ++kinds;
   }
-  if (kinds != 1) s.fail("", "give exactly one of box, plane, list or body");
+  if (s.has("body")) spec.body = s.string("body");
+  if (kinds > 1 || (kinds == 0 && spec.body.empty()))
+    s.fail("",
+           "give exactly one of box, plane, list, set or body (set and the others may be "
+           "restricted to a body)");
   s.finish();
   return spec;
 }
@@ -225,13 +302,33 @@ std::vector<Index> select_nodes(const NodeSetSpec& spec, const Mesh& mesh) {
         s.fail("list", "node " + std::to_string(i) + " is outside 0.." +
                            std::to_string(mesh.num_nodes() - 1));
     nodes = *list;
-  } else {
-    const std::string& name = std::get<std::string>(spec.selector);
+  } else if (const auto* set = std::get_if<NodeSetSpec::SetName>(&spec.selector)) {
+    const auto& sets = mesh.node_sets;
+    const std::string& name = set->name;
+    const auto it = sets.find(name);
+    if (it == sets.end()) {
+      std::string known;
+      for (const auto& [n, set] : sets) known += (known.empty() ? "'" : ", '") + n + "'";
+      s.fail("set", "no node set '" + name + "' (the meshes have " +
+                        (known.empty() ? std::string("none") : known) + ")");
+    }
+    nodes = it->second;
+  }
+  // "body" alone selects the whole body; with another selector it keeps that selection's nodes
+  // in the body.
+  if (!spec.body.empty()) {
     Index id = -1;
     for (size_t b = 0; b < mesh.bodies.size(); ++b)
-      if (mesh.bodies[b].name == name) id = static_cast<Index>(b);
-    if (id < 0) s.fail("body", "no body named '" + name + "'");
-    nodes = nodes_of_body(mesh, id);
+      if (mesh.bodies[b].name == spec.body) id = static_cast<Index>(b);
+    if (id < 0) s.fail("body", "no body named '" + spec.body + "'");
+    const Body& body = mesh.bodies[id];
+    if (std::holds_alternative<std::monostate>(spec.selector)) {
+      nodes = nodes_of_body(mesh, id);
+    } else {
+      std::erase_if(nodes, [&](Index i) {
+        return i < body.first_node || i >= body.first_node + body.num_nodes;
+      });
+    }
   }
   if (nodes.empty()) s.fail("", "selects no nodes");
   return nodes;
@@ -502,23 +599,27 @@ void check_sizes(JsonObject& r, const MeshCounts& counts) {
   }
 }
 
-// A Newton tolerance that is infinite would call any residual converged, one that underflows to
-// zero none: both come from extreme moduli or mesh sizes.
+// A Newton test that is infinite would call any residual converged, one that underflows to
+// zero none: both come from extreme moduli, mesh sizes or tolerances. Residual norms square
+// forces of order E h^2, so E^2 must be finite too.
 void check_newton_tolerance(JsonObject& r, const Scene& scene,
                             const std::vector<std::string>& material_paths) {
-  const double tolerance = newton_tolerance(scene);
-  if (std::isfinite(tolerance) && tolerance > 0) return;
+  NewtonOptions newton;
+  set_newton_tolerance(scene, newton);
   size_t stiffest = 0;
   double E = 0;
   for (size_t g = 0; g < scene.groups.size(); ++g) {
     const double Eg = material_moduli(scene.groups[g].material).youngs();
     if (!(Eg <= E)) E = Eg, stiffest = g;
   }
+  const bool scale_ok = newton.force_scale.allFinite() && (newton.force_scale.array() > 0).all();
+  const double tolerance = newton.tolerance;
+  if (std::isfinite(tolerance) && tolerance > 0 && scale_ok && std::isfinite(E * E)) return;
   const std::string why =
-      "the Newton tolerance (tolerance x E h^2 sqrt(#dofs)) is " + number_text(tolerance) +
-      " N, not a finite positive number (E = " + number_text(E) +
+      "the Newton test (residual / E h^2 against tolerance x sqrt(#dofs) = " +
+      number_text(tolerance) + ") is not finite and positive (E = " + number_text(E) +
       " Pa, mean edge h = " + number_text(mean_edge_length(scene.mesh.X, scene.mesh.tets)) + " m)";
-  if (!std::isfinite(E) || !std::isfinite(E * E) || scene.groups.empty())
+  if (!scale_ok || !std::isfinite(E * E) || scene.groups.empty())
     r.fail(scene.groups.empty() ? "bodies" : material_paths[stiffest], why);
   r.fail("solver.tolerance", why);
 }
@@ -558,8 +659,7 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
     MeshSpec mesh;
     JsonObject mesh_where;
     bool rigid;
-    MaterialModel material;
-    Vec3 fiber;
+    std::vector<BodyMaterial> materials;  // deformable bodies
     double density;
     Vec3 velocity;
   };
@@ -578,15 +678,15 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
                   mesh_where,
                   b.boolean("rigid", false),
                   {},
-                  Vec3::UnitX(),
                   0,
                   Vec3::Zero()};
     if (body.rigid) {
-      if (b.has("material")) b.fail("material", "a rigid body takes no material");
+      for (const char* key : {"material", "materials"})
+        if (b.has(key)) b.fail(key, "a rigid body takes no material");
     } else {
-      const JsonObject material = b.object("material");
-      body.material = read_material(material, body.fiber);
-      material_paths.push_back(material.path());
+      if (b.has("materials") && !std::holds_alternative<std::string>(body.mesh.source))
+        b.fail("materials", "the body's mesh has no regions (physical volumes); use material");
+      body.materials = read_body_materials(b);
     }
     body.density = b.number("density", 1000.0);
     if (!(body.density > 0)) b.fail("density", "must be > 0");
@@ -637,7 +737,8 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
   std::vector<double> density;
   std::vector<Vec3> velocity;
   for (const BodySpec& b : bodies) {
-    const Index id = scene.mesh.add_body(b.name, make_mesh(b.mesh, b.mesh_where));
+    const LoadedMesh loaded = make_mesh(b.mesh, b.mesh_where);
+    const Index id = scene.mesh.add_body(b.name, loaded.mesh, loaded.node_sets);
     const Body& body = scene.mesh.bodies[id];
     scene.rigid.push_back(b.rigid);
     if (b.rigid) {
@@ -646,11 +747,17 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
       for (Index k = 0; k < body.num_nodes; ++k) nodes[k] = body.first_node + k;
       scene.constraints.push_back({b.name + "_rigid", nodes, Fixed{}});
     } else {
-      ElasticGroup g{b.material, {}, Points()};
-      for (Index t = 0; t < body.num_tets; ++t) g.tets.push_back(body.first_tet + t);
-      if (material_uses_fiber(g.material))
-        g.fibers = b.fiber.transpose().replicate(body.num_tets, 1);
-      scene.groups.push_back(std::move(g));
+      for (const BodyMaterial& m : region_materials_checked(b.materials, loaded, b.where)) {
+        const auto region = std::ranges::find(loaded.region_names, m.region);
+        ElasticGroup g{m.model, {}, Points()};
+        for (Index t = 0; t < body.num_tets; ++t)
+          if (m.region.empty() || loaded.region_names.begin() + loaded.tet_region[t] == region)
+            g.tets.push_back(body.first_tet + t);
+        if (material_uses_fiber(g.material))
+          g.fibers = m.fiber.transpose().replicate(static_cast<Index>(g.tets.size()), 1);
+        scene.groups.push_back(std::move(g));
+        material_paths.push_back(m.path);
+      }
     }
     velocity.insert(velocity.end(), static_cast<size_t>(body.num_nodes), b.velocity);
     density.insert(density.end(), static_cast<size_t>(body.num_tets), b.density);

@@ -7,17 +7,14 @@
 #include "core/lumped_mass.hpp"
 #include "integrators/consistent_mass.hpp"
 #include "integrators/gravity.hpp"
+#include "integrators/residual_scale.hpp"
 #include "integrators/stiffness_tether.hpp"
 
 namespace depthfem {
 
-// Relative tolerance x elastic force scale E h^2 x sqrt(#dofs): a bound on the root-mean-square
-// nodal residual relative to the force of unit strain on one cell.
-double newton_tolerance(const Scene& scene) {
-  double E = 0;
-  for (const ElasticGroup& g : scene.groups) E = std::max(E, material_moduli(g.material).youngs());
-  const double h = mean_edge_length(scene.mesh.X, scene.mesh.tets);
-  return scene.tolerance * E * h * h * std::sqrt(3.0 * scene.mesh.num_nodes());
+void set_newton_tolerance(const Scene& scene, NewtonOptions& newton) {
+  newton.force_scale = residual_force_scale(scene.mesh.X, scene.mesh.tets, scene.groups);
+  newton.tolerance = scene.tolerance * std::sqrt(3.0 * scene.mesh.num_nodes());
 }
 
 LifecycleTerms SceneModel::lifecycle_terms() const {
@@ -78,7 +75,8 @@ std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers)
       PhaseTimers::Scope t(timers, "collision detection: material depth");
       model->depth = material_depth(mesh);
     }
-    system.add(std::make_unique<MaterialDepthContact>(mesh, model->depth, scene.contact_options));
+    model->contact = &system.add(
+        std::make_unique<MaterialDepthContact>(mesh, model->depth, scene.contact_options));
   } else if (scene.contact == ContactModel::kNodeToSurface) {
     system.add(std::make_unique<NodeToSurfaceContact>(mesh, scene.contact_options.penalty));
   }
@@ -90,9 +88,9 @@ std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers)
   }
   model->constraints = Constraints(mesh.X, scene.constraints);
   model->static_options = scene.static_options;
-  model->static_options.newton.tolerance = newton_tolerance(scene);
+  set_newton_tolerance(scene, model->static_options.newton);
   model->dynamic_options = scene.dynamic_options;
-  model->dynamic_options.newton.tolerance = model->static_options.newton.tolerance;
+  set_newton_tolerance(scene, model->dynamic_options.newton);
   return model;
 }
 

@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "apps/scene.hpp"
+#include "contact/material_depth_contact.hpp"
 #include "integrators/implicit_stepper.hpp"
 #include "integrators/step_lifecycle.hpp"
 
@@ -20,8 +21,9 @@ struct SceneModel {
   VectorX lumped_mass;  ///< per node [kg]
   VectorX depth;        ///< material depth per node [m]; empty without material-depth contact
   const Elasticity* elasticity = nullptr;
-  NodalSpring* quasi_viscosity = nullptr;  ///< static analysis with quasi_viscosity > 0
-  ImplicitTerms implicit;                  ///< inertia and damping of the implicit schemes
+  const MaterialDepthContact* contact = nullptr;  ///< material-depth contact, when on
+  NodalSpring* quasi_viscosity = nullptr;         ///< static analysis with quasi_viscosity > 0
+  ImplicitTerms implicit;                         ///< inertia and damping of the implicit schemes
   /// K = M for the kinetic energy of time-dependent runs: the inertia module when the scheme
   /// has one, else this lumped mass (not part of the System).
   std::unique_ptr<NodalSpring> mass_outside_system;
@@ -36,8 +38,9 @@ struct SceneModel {
 /// (timed as collision detection). Throws InputError for inconsistent input.
 std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers);
 
-/// Newton tolerance [N] of a scene: its relative tolerance x an elastic force scale (see
-/// apps/README.md).
-double newton_tolerance(const Scene& scene);
+/// Sets the Newton test of a scene (see apps/README.md): the residual divided per dof by the
+/// force of unit strain on a cell of the stiffest material at that node (`force_scale`), its
+/// root mean square at most the scene's relative tolerance (`tolerance`).
+void set_newton_tolerance(const Scene& scene, NewtonOptions& newton);
 
 }  // namespace depthfem

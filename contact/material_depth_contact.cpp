@@ -22,6 +22,18 @@ std::array<Vec3, 4> tet_corners(const Points& x, const TetIndices& tets, Index t
 std::array<Vec3, 3> tri_corners(const Points& x, const TriIndices& tris, Index f) {
   return {x.row(tris(f, 0)), x.row(tris(f, 1)), x.row(tris(f, 2))};
 }
+
+// True when some fan triangle of the polygon counts (fan_triangle_counts). A polygon without one
+// (a triangle touching a tet along an edge or at a point, as where bodies rest on each other)
+// adds nothing to the energy or its derivatives, so it is not kept as a pair: it would only
+// cost clipping, integration and couplings in the Hessian pattern.
+bool has_area(const ClipPolygon& poly, double min_area2) {
+  for (int k = 1; k + 1 < poly.size; ++k) {
+    const Vec3 c = (poly.x[k] - poly.x[0]).cross(poly.x[k + 1] - poly.x[0]);
+    if (fan_triangle_counts(c.squaredNorm(), min_area2)) return true;
+  }
+  return false;
+}
 }  // namespace
 
 MaterialDepthContact::MaterialDepthContact(const Mesh& mesh, VectorX depth, ContactOptions options)
@@ -67,7 +79,7 @@ void MaterialDepthContact::prepare(const Points& x) {
         }
         ++candidates[c];
         ClipPolygon poly = clip_triangle_by_tet(tet_corners(x, tets_, t), Q);
-        if (poly.size >= 3) found[c].push_back({f, t, poly});
+        if (poly.size >= 3 && has_area(poly, min_area2_)) found[c].push_back({f, t, poly});
       });
     }
   });
@@ -161,9 +173,10 @@ double MaterialDepthContact::evaluate(const Points& x, VectorX* gradient,
 void MaterialDepthContact::report(const Points& x, StepRecord& step) const {
   const Index n = static_cast<Index>(pairs_.size());
   std::vector<PairGradient> gradients(static_cast<size_t>(n));
+  std::vector<double> energies(static_cast<size_t>(n));
   tbb::parallel_for(tbb::blocked_range<Index>(0, n, 16), [&](const tbb::blocked_range<Index>& r) {
     for (Index k = r.begin(); k < r.end(); ++k)
-      pair_derivatives(x, pairs_[k], gradients[k], nullptr);
+      energies[k] = pair_derivatives(x, pairs_[k], gradients[k], nullptr);
   });
   ContactInterfaces::Tally tally = interfaces_.tally(step);
   step.surface.resize(static_cast<Index>(tris_.rows()));
@@ -185,6 +198,9 @@ void MaterialDepthContact::report(const Points& x, StepRecord& step) const {
   for (Index k = 0; k < n; ++k) {  // in pair order: the same sums for any number of threads
     const ContactPair& p = pairs_[k];
     if (k > 0 && p.tri != pairs_[k - 1].tri) flush(pairs_[k - 1].tri);
+    // A polygon with zero depth everywhere (a surface resting on another, a bonded interface)
+    // touches but does not press: no force, no contact area.
+    if (!(energies[k] > 0)) continue;
     // The penalty pushes the triangle out of the tet: -grad W on the triangle's side.
     const Vec3 on_triangle = -gradients[k].tail<9>().reshaped(3, 3).rowwise().sum();
     // Material depth at the polygon's vertices: the tet's linear depth field g0 + a . (R - P0).

@@ -28,7 +28,7 @@ struct ContactPair {
 /// How many pairs the last prepare() examined and kept.
 struct ContactStats {
   Index candidates = 0;  ///< triangle-tet pairs whose boxes overlap
-  Index active = 0;      ///< pairs with an intersection polygon
+  Index active = 0;      ///< pairs with an intersection polygon of non-zero area
 };
 
 /// The contact force module. Geometry (tree, clipping, depth lookup) lives in aabb_tree, clip
@@ -49,9 +49,10 @@ class MaterialDepthContact final : public ForceModule {
   double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
   /// One row per interface (ContactInterfaces): every pair of bodies "a/b" and, with
   /// self-contact, every body against itself "a (self)"; areas are those of the clipped
-  /// triangles. A triangle's pairs are netted per body it enters (the in-plane pulls of the
-  /// pieces a triangle is cut into cancel), and each net force, with its area and depth
-  /// integral, goes to the interface's row and to the triangle in step.surface.
+  /// triangles that press (some depth inside the tet). A triangle's pairs are netted per body it
+  /// enters (the in-plane pulls of the pieces a triangle is cut into cancel), and each net force,
+  /// with its area and depth integral, goes to the interface's row and to the triangle in
+  /// step.surface.
   void report(const Points& x, StepRecord& step) const override;
 
   const std::vector<ContactPair>& pairs() const { return pairs_; }

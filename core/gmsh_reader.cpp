@@ -1,6 +1,8 @@
 #include "core/gmsh_reader.hpp"
 
 #include <algorithm>
+#include <map>
+#include <set>
 #include <span>
 #include <string_view>
 #include <unordered_map>
@@ -16,9 +18,14 @@ namespace {
 using Tokens = std::span<const std::string_view>;
 
 constexpr long long kTet4 = 4;
+struct LowerType {
+  long long type;
+  int dim;
+};
 // Gmsh element types of dimension 0 to 2 (points, lines, triangles, quadrangles of any order).
-constexpr long long kLowerDimensionalTypes[] = {1,  2,  3,  8,  9,  10, 15, 16, 20,
-                                                21, 22, 23, 24, 25, 26, 27, 28};
+constexpr LowerType kLowerDimensionalTypes[] = {
+    {1, 1},  {2, 2},  {3, 2},  {8, 1},  {9, 2},  {10, 2}, {15, 0}, {16, 2}, {20, 2},
+    {21, 2}, {22, 2}, {23, 2}, {24, 2}, {25, 2}, {26, 1}, {27, 1}, {28, 1}};
 struct VolumeType {
   long long type;
   const char* name;
@@ -33,14 +40,30 @@ constexpr VolumeType kOtherVolumeTypes[] = {
 
 enum class MshVersion { v2_2, v4_1 };
 
-// Everything read so far; tets keep node tags until the whole file is read, because Gmsh allows
-// $Elements before $Nodes.
+// (dimension, tag) of a physical group or of an elementary entity.
+using DimTag = std::pair<int, long long>;
+
+// An element of dimension 0 to 2 that may belong to physical groups (its nodes form node sets).
+struct LowerElement {
+  DimTag key;  // MSH 2.2: (dim, physical tag); MSH 4.1: (dim, entity tag)
+  long long tag;
+  long line;
+  size_t first, count;  // its node tags in MshContent::lower_node_tags
+};
+
+// Everything read so far; elements keep node tags until the whole file is read, because Gmsh
+// allows $Elements before $Nodes (and $Entities after $Elements).
 struct MshContent {
   std::vector<double> xyz;
   std::unordered_map<long long, Index> node_of_tag;
   MeshSource source;
   std::vector<long long> tet_node_tags;  // 4 per tet
   std::vector<long long> tet_tag;
+  std::vector<long long> tet_key;  // MSH 2.2: physical tag (0: none); MSH 4.1: entity tag
+  std::vector<LowerElement> lower;
+  std::vector<long long> lower_node_tags;
+  std::map<DimTag, std::string> physical_names;               // $PhysicalNames
+  std::map<DimTag, std::vector<long long>> entity_physicals;  // MSH 4.1 $Entities
   bool has_nodes = false, has_elements = false;
 };
 
@@ -116,11 +139,24 @@ void add_node(LineReader& in, MshContent& msh, long long tag, Tokens xyz) {
   msh.source.node_line.push_back(in.line());
 }
 
-// Keeps a 4-node tetrahedron, skips lower-dimensional elements, rejects every other type.
-void add_element(LineReader& in, MshContent& msh, long long tag, long long type, Tokens nodes) {
+// Keeps a 4-node tetrahedron and, where it may belong to a physical group, a lower-dimensional
+// element; rejects every other type. `key` is the physical tag (MSH 2.2, 0 for none) or the
+// entity tag (MSH 4.1) of the element.
+void add_element(LineReader& in, MshContent& msh, long long tag, long long type, long long key,
+                 bool key_is_entity, Tokens nodes) {
   const auto element = [&] { return "element " + std::to_string(tag); };
   if (type != kTet4) {
-    if (std::ranges::find(kLowerDimensionalTypes, type) != std::end(kLowerDimensionalTypes)) return;
+    const auto* lower = std::ranges::find(kLowerDimensionalTypes, type, &LowerType::type);
+    if (lower != std::end(kLowerDimensionalTypes)) {
+      if (!key_is_entity && key == 0) return;  // MSH 2.2 element in no physical group
+      msh.lower.push_back({{lower->dim, key}, tag, in.line(), msh.lower_node_tags.size(), 0});
+      for (const std::string_view node : nodes) {
+        msh.lower_node_tags.push_back(
+            in.to_integer(node, [&] { return "a node tag of " + element(); }));
+      }
+      msh.lower.back().count = nodes.size();
+      return;
+    }
     const auto* volume = std::ranges::find(kOtherVolumeTypes, type, &VolumeType::type);
     if (volume == std::end(kOtherVolumeTypes)) {
       in.fail(element() + " has unsupported element type " + std::to_string(type));
@@ -135,6 +171,7 @@ void add_element(LineReader& in, MshContent& msh, long long tag, long long type,
     msh.tet_node_tags.push_back(in.to_integer(node, [&] { return "a node tag of " + element(); }));
   }
   msh.tet_tag.push_back(tag);
+  msh.tet_key.push_back(key);
   msh.source.tet_line.push_back(in.line());
 }
 
@@ -173,7 +210,10 @@ void read_elements_v2(LineReader& in, MshContent& msh) {
       in.fail(element() + " announces " + std::to_string(num_tags) +
               " tags but the line has only " + std::to_string(t.size() - 3) + " values after them");
     }
-    add_element(in, msh, tag, type, t.subspan(3 + num_tags));
+    // The first tag is the physical group (0: none), the second the elementary entity.
+    const long long physical =
+        num_tags > 0 ? in.to_integer(t[3], [&] { return "the physical tag of " + element(); }) : 0;
+    add_element(in, msh, tag, type, physical, false, t.subspan(3 + num_tags));
   }
   expect_section_end(in, "Elements");
 }
@@ -232,12 +272,13 @@ void read_elements_v4(LineReader& in, MshContent& msh) {
     next_entry(in, "Elements", "elements", count, read);
     const auto block = [] { return "an element block header (dim entity type #elements)"; };
     in.expect_tokens(4, block);
+    const long long entity = in.to_integer(in.tokens()[1], block);
     const long long type = in.to_integer(in.tokens()[2], block);
     const Index n = in.to_count(in.tokens()[3], block);
     for (Index i = 0; i < n; ++i, ++read) {
       next_entry(in, "Elements", "elements", count, read);
       const Tokens t = in.tokens();
-      add_element(in, msh, in.to_integer(t[0], [] { return "an element tag"; }), type,
+      add_element(in, msh, in.to_integer(t[0], [] { return "an element tag"; }), type, entity, true,
                   t.subspan(1));
     }
   }
@@ -246,6 +287,140 @@ void read_elements_v4(LineReader& in, MshContent& msh) {
             " elements but $Elements announced " + std::to_string(count));
   }
   expect_section_end(in, "Elements");
+}
+
+// "n", then n lines "dim tag \"name\"" (the name may contain spaces).
+void read_physical_names(LineReader& in, MshContent& msh) {
+  const Index count = read_count(in, "PhysicalNames");
+  for (Index i = 0; i < count; ++i) {
+    next_entry(in, "PhysicalNames", "names", count, i);
+    const Tokens t = in.tokens();
+    const auto what = [] { return "a physical name (dim tag \"name\")"; };
+    if (t.size() < 3) in.fail("expected a physical name (dim tag \"name\")");
+    const long long dim = in.to_integer(t[0], what);
+    const long long tag = in.to_integer(t[1], what);
+    const std::string_view name(t[2].data(), t.back().data() + t.back().size() - t[2].data());
+    if (dim < 0 || dim > 3) in.fail("physical group dimension must be 0..3, found " + quoted(t[0]));
+    if (name.size() < 2 || name.front() != '"' || name.back() != '"')
+      in.fail("physical name must be in double quotes, found " + quoted(name));
+    msh.physical_names[{static_cast<int>(dim), tag}] = std::string(name.substr(1, name.size() - 2));
+  }
+  expect_section_end(in, "PhysicalNames");
+}
+
+// MSH 4.1: "#points #curves #surfaces #volumes", then one line per entity: its tag, its
+// coordinates (points: x y z; others: a bounding box of six numbers), its physical tags
+// ("n tag..."), and for curves, surfaces and volumes the bounding entities.
+void read_entities(LineReader& in, MshContent& msh) {
+  if (!in.next()) in.fail("file ends inside $Entities");
+  const auto header = [] { return "the $Entities header (#points #curves #surfaces #volumes)"; };
+  in.expect_tokens(4, header);
+  Index counts[4];
+  for (int d = 0; d < 4; ++d) counts[d] = in.to_count(in.tokens()[d], header);
+  for (int dim = 0; dim < 4; ++dim) {
+    for (Index i = 0; i < counts[dim]; ++i) {
+      next_entry(in, "Entities", "entities", counts[dim], i);
+      const Tokens t = in.tokens();
+      const size_t at = dim == 0 ? 4 : 7;  // position of the number of physical tags
+      const auto what = [&] { return "an entity of dimension " + std::to_string(dim); };
+      if (t.size() <= at) in.fail("expected " + what() + " (tag, coordinates, physical tags)");
+      const long long tag = in.to_integer(t[0], what);
+      const Index n = in.to_count(t[at], what);
+      if (t.size() < at + 1 + static_cast<size_t>(n))
+        in.fail(what() + " announces " + std::to_string(n) + " physical tags but lists fewer");
+      std::vector<long long>& physicals = msh.entity_physicals[{dim, tag}];
+      for (Index k = 0; k < n; ++k) {
+        // Gmsh writes a negative tag for a group whose orientation is reversed.
+        physicals.push_back(std::abs(in.to_integer(t[at + 1 + k], what)));
+      }
+    }
+  }
+  expect_section_end(in, "Entities");
+}
+
+// Physical tags of an element with `key` (see LowerElement::key). A MSH 4.1 entity that
+// $Entities does not list has none.
+std::vector<long long> physical_tags(const MshContent& msh, MshVersion version, const DimTag& key) {
+  if (version == MshVersion::v2_2) {
+    if (key.second == 0) return {};
+    return {key.second};
+  }
+  const auto it = msh.entity_physicals.find(key);
+  return it != msh.entity_physicals.end() ? it->second : std::vector<long long>{};
+}
+
+// Name of a physical group: its $PhysicalNames entry, else its tag.
+std::string physical_name(const MshContent& msh, int dim, long long tag) {
+  const auto it = msh.physical_names.find({dim, tag});
+  return it != msh.physical_names.end() ? it->second : std::to_string(tag);
+}
+
+// Regions from the physical volumes of the tets, and node sets from every physical group.
+void add_groups(const MshContent& msh, MshVersion version, const std::vector<Index>& tets,
+                LoadedMesh& out) {
+  const std::string& file = msh.source.file;
+  const Index num_tets = static_cast<Index>(msh.tet_tag.size());
+  std::map<long long, std::string> volume_names;  // physical tag -> name, in tag order
+  std::vector<std::string> tet_name(static_cast<size_t>(num_tets));
+  Index with = -1, without = -1;  // a tet with a region and one without
+  for (Index t = 0; t < num_tets; ++t) {
+    std::set<std::string> names;
+    for (long long tag : physical_tags(msh, version, {3, msh.tet_key[t]})) {
+      names.insert(physical_name(msh, 3, tag));
+      volume_names.emplace(tag, physical_name(msh, 3, tag));
+    }
+    const auto element = "element " + std::to_string(msh.tet_tag[t]);
+    if (names.size() > 1) {
+      throw InputError(located(file, msh.source.tet_line[t],
+                               element + " belongs to the physical volumes '" + *names.begin() +
+                                   "' and '" + *std::next(names.begin()) +
+                                   "'; a tet may belong to one region only"));
+    }
+    if (names.empty()) {
+      without = t;
+    } else {
+      with = t;
+      tet_name[t] = *names.begin();
+    }
+  }
+  if (with >= 0 && without >= 0) {
+    throw InputError(located(file, msh.source.tet_line[without],
+                             "element " + std::to_string(msh.tet_tag[without]) +
+                                 " belongs to no physical volume, but element " +
+                                 std::to_string(msh.tet_tag[with]) + " belongs to '" +
+                                 tet_name[with] + "': give every tet a region or none"));
+  }
+  std::map<std::string, std::set<Index>> sets;
+  if (with >= 0) {
+    for (const auto& [tag, name] : volume_names) {
+      if (std::ranges::find(out.region_names, name) == out.region_names.end())
+        out.region_names.push_back(name);
+    }
+    out.tet_region.resize(static_cast<size_t>(num_tets));
+    for (Index t = 0; t < num_tets; ++t) {
+      out.tet_region[t] = static_cast<Index>(std::ranges::find(out.region_names, tet_name[t]) -
+                                             out.region_names.begin());
+      sets[tet_name[t]].insert(tets.begin() + 4 * t, tets.begin() + 4 * t + 4);
+    }
+  }
+  for (const LowerElement& e : msh.lower) {
+    const std::vector<long long> tags = physical_tags(msh, version, e.key);
+    if (tags.empty()) continue;
+    std::vector<Index> nodes;
+    for (size_t k = e.first; k < e.first + e.count; ++k) {
+      const auto it = msh.node_of_tag.find(msh.lower_node_tags[k]);
+      if (it == msh.node_of_tag.end()) {
+        throw InputError(located(file, e.line,
+                                 "element " + std::to_string(e.tag) + " references node " +
+                                     std::to_string(msh.lower_node_tags[k]) +
+                                     ", which is not defined"));
+      }
+      nodes.push_back(it->second);
+    }
+    for (long long tag : tags)
+      sets[physical_name(msh, e.key.first, tag)].insert(nodes.begin(), nodes.end());
+  }
+  for (auto& [name, nodes] : sets) out.node_sets[name].assign(nodes.begin(), nodes.end());
 }
 
 }  // namespace
@@ -276,6 +451,10 @@ LoadedMesh read_gmsh(const std::string& path) {
       } else {
         read_elements_v4(in, msh);
       }
+    } else if (head == "$PhysicalNames" && in.tokens().size() == 1) {
+      read_physical_names(in, msh);
+    } else if (head == "$Entities" && in.tokens().size() == 1 && version == MshVersion::v4_1) {
+      read_entities(in, msh);
     } else if (head.starts_with('$') && !head.starts_with("$End") && in.tokens().size() == 1) {
       skip_section(in, std::string(head.substr(1)));
     } else {
@@ -296,7 +475,9 @@ LoadedMesh read_gmsh(const std::string& path) {
     }
     tets[i] = it->second;
   }
-  return finish_loaded_mesh(msh.xyz, tets, msh.source);
+  LoadedMesh out = finish_loaded_mesh(msh.xyz, tets, msh.source);
+  add_groups(msh, version, tets, out);
+  return out;
 }
 
 }  // namespace depthfem

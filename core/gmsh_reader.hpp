@@ -8,11 +8,16 @@
 namespace depthfem {
 
 /// Reads the 4-node tetrahedra (element type 4) of a Gmsh MSH 2.2 or 4.1 ASCII file; the version
-/// comes from $MeshFormat. Points, lines and triangles are skipped, as are sections other than
-/// $MeshFormat, $Nodes and $Elements. Node tags may be arbitrary; nodes keep their file order.
+/// comes from $MeshFormat. Node tags may be arbitrary; nodes keep their file order.
+/// Physical groups (named by $PhysicalNames, else by their tag; in MSH 4.1 an element's groups
+/// are those of its entity in $Entities): physical volumes become regions (LoadedMesh::
+/// region_names, tet_region), and every physical group of any dimension becomes a node set of
+/// the nodes of its elements. Points, lines and triangles serve only for node sets; sections
+/// other than $MeshFormat, $PhysicalNames, $Entities, $Nodes and $Elements are skipped.
 /// Throws InputError naming file, line and element for binary files, other versions, other 3D
 /// element types (quadratic tets, hexahedra, prisms, pyramids), undefined node tags, malformed
-/// numbers and truncated sections; the mesh is then checked by validate_and_orient.
+/// numbers and truncated sections, a tet in two regions, and a file where some tets have a region
+/// and others none; the mesh is then checked by validate_and_orient.
 LoadedMesh read_gmsh(const std::string& path);
 
 }  // namespace depthfem

@@ -13,7 +13,7 @@ void append_rows(M& dst, const M& src) {
 }
 }  // namespace
 
-Index Mesh::add_body(const std::string& name, const TetMesh& body) {
+Index Mesh::add_body(const std::string& name, const TetMesh& body, const NodeSets& sets) {
   Body b;
   b.name = name;
   b.first_node = num_nodes();
@@ -32,6 +32,9 @@ Index Mesh::add_body(const std::string& name, const TetMesh& body) {
   append_rows(tet_body, IndexVector(IndexVector::Constant(b.num_tets, id)));
   append_rows(tri_body, IndexVector(IndexVector::Constant(b.num_tris, id)));
   bodies.push_back(b);
+  // Bodies follow each other, so appending keeps every set sorted.
+  for (const auto& [set, nodes] : sets)
+    for (Index i : nodes) node_sets[set].push_back(b.first_node + i);
   return id;
 }
 

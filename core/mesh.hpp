@@ -25,14 +25,17 @@ struct Mesh {
   IndexVector tet_body;  ///< #tets body id
   IndexVector tri_body;  ///< #tris body id
   std::vector<Body> bodies;
+  /// Named node sets of all bodies (scene node indices); a name several bodies use holds the
+  /// nodes of each.
+  NodeSets node_sets;
 
   Index num_nodes() const { return static_cast<Index>(X.rows()); }
   Index num_tets() const { return static_cast<Index>(tets.rows()); }
   Index num_tris() const { return static_cast<Index>(tris.rows()); }
 
-  /// Appends a body (nodes, tets, its boundary triangles) and returns its id.
-  /// The mesh must already be validated (positive tets).
-  Index add_body(const std::string& name, const TetMesh& body);
+  /// Appends a body (nodes, tets, its boundary triangles) with its node sets (body node indices)
+  /// and returns its id. The mesh must already be validated (positive tets).
+  Index add_body(const std::string& name, const TetMesh& body, const NodeSets& sets = {});
 };
 
 /// A scene mesh holding one body.

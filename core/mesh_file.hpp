@@ -8,10 +8,18 @@
 
 namespace depthfem {
 
-/// A mesh read from a file and how many of its tets were re-oriented.
+/// A mesh read from a file, how many of its tets were re-oriented, and its named groups.
 struct LoadedMesh {
   TetMesh mesh;          ///< validated, every tet positively oriented
   Index reoriented = 0;  ///< tets whose last two nodes were swapped to make their volume positive
+  /// Element regions (Gmsh physical volumes, by name), in order of their first physical tag;
+  /// empty when the file defines none.
+  std::vector<std::string> region_names;
+  /// #tets index into region_names; empty when the file defines no regions.
+  std::vector<Index> tet_region;
+  /// Every named group of the file (Gmsh physical groups of any dimension) as the nodes of its
+  /// elements.
+  NodeSets node_sets;
 };
 
 /// Reads a mesh, choosing the reader by extension: ".msh" (Gmsh 2.2 or 4.1 ASCII) or

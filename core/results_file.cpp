@@ -1,5 +1,6 @@
 #include "core/results_file.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
@@ -90,6 +91,7 @@ std::vector<StepValue> step_values(const StepRecord& step, bool velocity,
     out.push_back({"reaction " + constraint_names[k], {r(0), r(1), r(2)}});
   }
   if (!step.contact.empty()) out.push_back({"contact_area", {step.contact_area()}});
+  if (step.penetration) out.push_back({"penetration", {*step.penetration}});
   for (const InterfaceForce& c : step.contact) {
     out.push_back({"contact_force " + c.name, {c.force(0), c.force(1), c.force(2)}});
     out.push_back({"contact_force_magnitude " + c.name, {c.magnitude}});
@@ -176,6 +178,15 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
   for (const Body& body : mesh.bodies) body_names.push_back(body.name);
   f.write_strings("/mesh/body_names", body_names);
   f.write_strings("/mesh/body_materials", info.body_materials);
+  if (!mesh.node_sets.empty()) {
+    f.create_group("/mesh/node_sets");
+    for (const auto& [name, nodes] : mesh.node_sets) {
+      std::string object = name;  // '/' would open a subgroup
+      std::ranges::replace(object, '/', '_');
+      f.write_array("/mesh/node_sets/" + object,
+                    Eigen::Map<const IndexVector>(nodes.data(), Eigen::Index(nodes.size())));
+    }
+  }
   if (s.blocks.size() > 1) {
     f.create_group("/mesh/blocks");
     for (size_t b = 0; b < s.blocks.size(); ++b) {
@@ -301,6 +312,7 @@ void ResultsFile::append_step(const StepRecord& step, const Points& x, const Poi
       areas(k) = step.contact[k].area;
     }
     f.set_attribute(group, "contact_area", step.contact_area());
+    if (step.penetration) f.set_attribute(group, "penetration", *step.penetration);
     f.write_array(group + "/contact_forces", forces);
     f.write_array(group + "/contact_force_magnitudes", magnitudes);
     f.write_array(group + "/contact_areas", areas);

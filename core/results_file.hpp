@@ -5,7 +5,8 @@
 ///
 /// Layout (datasets row-major; strings variable-length UTF-8):
 ///   /mesh: X, tets, tris, tet_body, tri_body, tri_tet, body_names, body_materials, depth (with
-///   material-depth contact only); with several bodies also blocks/<b>/tets (body-local node
+///   material-depth contact only), node_sets/NAME (named node sets of the meshes, '/' in NAME
+///   written '_'); with several bodies also blocks/<b>/tets (body-local node
 ///   indices) and blocks/<b>/depth (a view);
 ///   /run attributes scene, version, threads, analysis, status ("running", "completed",
 ///   "failed"), message; datasets constraint_names, contact_names (with the first step);
@@ -13,11 +14,11 @@
 ///   run writes: zeros where they vanish, the initial velocity, volume ratio 1);
 ///   /steps/NNNNNN (6-digit step index): attributes index, load, settling, newton_iterations,
 ///   linear_iterations, energy, seconds, kinetic_energy (with velocities), contact_area (with
-///   contact); datasets x, displacement, v, residuals, reactions, contact_forces,
-///   contact_force_magnitudes, contact_areas, stress, von_mises, strain, volume_ratio,
-///   contact_pressure, contact_traction, contact_gap, contact_fraction (those the run writes);
-///   with several bodies, blocks/<b>/ row views of the node and tet datasets;
-///   /timing attributes, one f64 [s] per phase, in the order given.
+///   contact), penetration (with material-depth contact); datasets x, displacement, v, residuals,
+///   reactions, contact_forces, contact_force_magnitudes, contact_areas, stress, von_mises, strain,
+///   volume_ratio, contact_pressure, contact_traction, contact_gap, contact_fraction (those the run
+///   writes); with several bodies, blocks/<b>/ row views of the node and tet datasets; /timing
+///   attributes, one f64 [s] per phase, in the order given.
 /// Views are HDF5 virtual datasets of rows of this file: they let the sidecar give every body
 /// its own grid, which ParaView's XDMF readers cannot cut out of the scene-wide arrays. The
 /// sidecar's time of a step is its load (time-dependent runs: its time); ParaView shows one

@@ -2,6 +2,7 @@
 /// What a completed step (static load increment or time step) reports: the one record every
 /// driver fills through the step lifecycle, the results file writes and the tools read.
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -73,6 +74,9 @@ struct StepRecord {
   std::vector<InterfaceForce> contact;
   /// Contact per boundary triangle (empty without material-depth or obstacle contact).
   SurfaceContact surface;
+  /// Deepest geometric penetration [m] of the material-depth contact pairs (deepest_penetration;
+  /// set by the scene runner), absent without material-depth contact.
+  std::optional<double> penetration;
 
   /// Total contact area [m^2] over all interfaces.
   double contact_area() const {

@@ -1,6 +1,7 @@
 #pragma once
 /// A single tetrahedral mesh as produced by generators and readers, and its validation.
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,9 @@ struct TetMesh {
   Points X;         ///< #nodes x 3 reference positions [m]
   TetIndices tets;  ///< #tets x 4 node indices, positively oriented after `validate_and_orient`
 };
+
+/// Named node sets: name -> sorted node indices without repeats.
+using NodeSets = std::map<std::string, std::vector<Index>>;
 
 /// Where a mesh came from, so that validation errors can name the file and line of an entry.
 struct MeshSource {

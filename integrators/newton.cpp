@@ -11,6 +11,10 @@ namespace {
 constexpr double kMaxStepFraction = 0.9;
 }  // namespace
 
+double scaled_residual(const NewtonOptions& options, const VectorX& g) {
+  return options.force_scale.size() == 0 ? g.norm() : g.cwiseQuotient(options.force_scale).norm();
+}
+
 bool NewtonSolver::line_search(Points& x, const Points& step, double energy, double residual) {
   VectorX g_trial;
   // Start below the first step length at which some module turns illegal (an element would
@@ -38,6 +42,23 @@ bool NewtonSolver::line_search(Points& x, const Points& step, double energy, dou
   return false;
 }
 
+Points NewtonSolver::linearised_step(const Points& x, const Points& u) {
+  VectorX g, Hu, dx;
+  system_.prepare(x);
+  system_.hessian(x, g);
+  BlockSparseMatrix& H = system_.matrix();
+  H.multiply(as_dofs(u), Hu);
+  VectorX rhs = -(g + Hu);
+  constraints_.project(rhs);
+  constraints_.project(H);
+  {
+    PhaseTimers::Scope t(system_.timers(), "linear solve");
+    linear_.solve(H, rhs, dx);
+  }
+  constraints_.project(dx);  // an inexact solve may leak into the prescribed directions
+  return x + u + as_points(dx);
+}
+
 NewtonResult NewtonSolver::solve(Points& x) {
   NewtonResult result;
   VectorX g, dx;
@@ -58,14 +79,17 @@ NewtonResult NewtonSolver::solve(Points& x) {
   for (;;) {
     result.energy = energy;
     // A non-finite residual (overflowing forces) never counts as converged.
-    if (std::isfinite(residual) && residual <= options_.tolerance) {
+    const double scaled = scaled_residual(options_, g);
+    if (std::isfinite(scaled) && scaled <= options_.tolerance) {
       result.converged = true;
       return result;
     }
     if (result.iterations == options_.max_iterations) {
-      result.failure = "no convergence in " + std::to_string(options_.max_iterations) +
-                       " Newton iterations (residual " + std::to_string(residual) +
-                       " N, tolerance " + std::to_string(options_.tolerance) + " N)";
+      result.failure =
+          "no convergence in " + std::to_string(options_.max_iterations) +
+          " Newton iterations (residual " + std::to_string(residual) + " N, " +
+          (options_.force_scale.size() ? "scaled " + std::to_string(scaled) + ", " : "") +
+          "tolerance " + std::to_string(options_.tolerance) + ")";
       return result;
     }
     BlockSparseMatrix& H = system_.matrix();

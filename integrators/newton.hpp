@@ -19,13 +19,21 @@ enum class LineSearchRule {
 struct NewtonOptions {
   int max_iterations = 30;
   LineSearchRule line_search = LineSearchRule::kEnergy;
-  /// Converged when |P grad E|_2 <= tolerance [N] (P: projection onto free directions), both
-  /// finite; a tolerance that is not finite and positive fails the solve at once.
+  /// Converged when |P grad E ./ force_scale|_2 <= tolerance (P: projection onto free
+  /// directions; with an empty force_scale, |P grad E|_2 <= tolerance [N]), both finite; a
+  /// tolerance that is not finite and positive fails the solve at once.
   double tolerance = 1e-8;
+  /// Per dof (3 * #nodes) [N]: the force each residual component is measured against (see
+  /// residual_force_scale), or empty.
+  VectorX force_scale;
   /// Step halvings before the line search gives up.
   int max_line_search = 30;
   LinearSolverOptions linear;
 };
+
+/// The norm of a (projected) residual that the Newton test compares with options.tolerance:
+/// |g ./ force_scale|_2, or |g|_2 without a scale.
+double scaled_residual(const NewtonOptions& options, const VectorX& g);
 
 /// How one Newton solve went.
 struct NewtonResult {
@@ -53,6 +61,12 @@ class NewtonSolver {
 
   /// Solves in place from x, whose constrained components must already hold their targets.
   NewtonResult solve(Points& x);
+
+  /// A first guess for a new load increment: from the (legal) state x, the prescribed motion u
+  /// (#nodes x 3, zero in the free directions) carried into the free directions by the stiffness
+  /// at x, dx = -(P H P + C)^-1 P (g + H u); returns x + u + dx. Where imposing u alone would
+  /// invert the elements beside the moved nodes, this spreads the motion over the body.
+  Points linearised_step(const Points& x, const Points& u);
 
   NewtonOptions& options() { return options_; }
 

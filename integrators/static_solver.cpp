@@ -30,12 +30,21 @@ void StaticSolver::run(Points& x) {
     if (viscosity_) viscosity_->set_anchor(x);
     lifecycle_.begin(x, target);
     system.prepare(trial);
-    if (!std::isfinite(system.energy(trial))) {  // predictor (or boundary motion) inverted a tet
-      trial = x;
+    // An illegal trial (the predictor, or the prescribed motion alone, inverts a tet): carry
+    // the prescribed motion into the body by the stiffness at x, else give up on the increment.
+    if (!std::isfinite(system.energy(trial))) {
+      Points moved = x;
+      constraints.impose(target, moved);
+      trial = newton_.linearised_step(x, moved - x);
       constraints.impose(target, trial);
+      system.prepare(trial);
       if (!std::isfinite(system.energy(trial))) {
-        last_failure = "prescribed motion inverts an element";
-        return false;
+        trial = moved;
+        system.prepare(trial);
+        if (!std::isfinite(system.energy(trial))) {
+          last_failure = "prescribed motion inverts an element";
+          return false;
+        }
       }
     }
     NewtonResult r = newton_.solve(trial);
@@ -93,7 +102,7 @@ void StaticSolver::run(Points& x) {
     viscosity_->set_anchor(before);
     viscosity_->evaluate(x, &viscous, nullptr);
     constraints.project(viscous);
-    if (viscous.norm() <= options_.newton.tolerance) return;
+    if (scaled_residual(options_.newton, viscous) <= options_.newton.tolerance) return;
     scale = std::max(scale / 2, 1e-12);
   }
   throw SolveError("the body did not come to rest in " + std::to_string(options_.max_settle_steps) +

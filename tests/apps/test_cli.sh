@@ -34,4 +34,22 @@ grep -q "^depthfem: error: run needs --out" "$tmp/usage.log" || fail "usage mess
 [ $? -eq 1 ] || fail "unknown key must exit 1"
 grep -q "bodies\[0\].material.C9: unknown key" "$tmp/key.log" || fail "unknown key not named: $(cat "$tmp/key.log")"
 "$exe" info "$tmp/nothing.h5" > /dev/null 2>&1 && fail "info on a missing file must fail"
+
+# A run killed mid-way: its progress lines reached the log file while it ran (stdout is a file),
+# and its results file keeps the completed steps and the timing of the phases so far.
+"$exe" run "$src/apps/scenes/sliding_blocks.json" --out "$tmp/killed.h5" \
+  --set solver.initial_increment=0.005 --set solver.max_increment=0.005 > "$tmp/killed.log" 2>&1 &
+pid=$!
+for _ in $(seq 1200); do
+  grep -q "^step    1" "$tmp/killed.log" && break
+  kill -0 $pid 2> /dev/null || break
+  sleep 0.1
+done
+kill -0 $pid 2> /dev/null || fail "the 200-step run ended (or never printed step 1) before it was killed"
+kill -9 $pid
+wait $pid 2> /dev/null
+grep -q "^step    1" "$tmp/killed.log" || fail "no progress line reached the log file during the run"
+"$exe" info "$tmp/killed.h5" > "$tmp/info3.log" || fail "info on the killed run exited $?"
+grep -q "status: running" "$tmp/info3.log" || fail "killed run: $(cat "$tmp/info3.log")"
+grep -q "linear solve" "$tmp/info3.log" || fail "the killed run kept no timing"
 echo "cli: all checks passed"

@@ -244,17 +244,15 @@ TEST_F(SceneFileTest, StepCountsAreBounded) {
 }
 
 TEST_F(SceneFileTest, NonFiniteScalesAreErrorsNamingTheKey) {
-  // Young's modulus 1e150 is finite, but with a coarse tolerance the Newton tolerance is not.
-  const std::string nh =
-      R"(bodies.0.material={"model": "neo_hookean", "youngs": 1e150, "poisson": 0.3})";
-  EXPECT_NE(error(kValid, {parse_override(nh), parse_override("solver.tolerance=1e200")})
-                .find("scene.json: solver.tolerance: the Newton tolerance (tolerance x E h^2 "
-                      "sqrt(#dofs)) is inf N"),
+  // A finite tolerance whose product with sqrt(#dofs) overflows.
+  EXPECT_NE(error(kValid, {parse_override("solver.tolerance=1e308")})
+                .find("scene.json: solver.tolerance: the Newton test (residual / E h^2 against "
+                      "tolerance x sqrt(#dofs) = inf)"),
             std::string::npos);
-  // Young's modulus 1e308: the force scale E h^2 itself overflows.
+  // Young's modulus 1e308: its square, which residual norms form, overflows.
   EXPECT_NE(error(kValid, {parse_override(R"(bodies.0.material={"model": "mooney_rivlin",
                                              "youngs": 1e308, "poisson": 0.3})")})
-                .find("scene.json: bodies[0].material: the Newton tolerance"),
+                .find("scene.json: bodies[0].material: the Newton test"),
             std::string::npos);
   EXPECT_NE(error(kValid, {parse_override("bodies.0.mesh.lo=[-1e308,0,0]"),
                            parse_override("bodies.0.mesh.hi=[1e308,1,1]")})
@@ -321,6 +319,108 @@ TEST_F(SceneFileTest, WholeSceneIsCheckedBeforeAnyMeshIsRead) {
   const std::string m = error(kValid, {parse_override(R"(bodies.0.mesh={"file": "missing.msh"})"),
                                        parse_override("solver.tolerence=1")});
   EXPECT_NE(m.find("scene.json: solver.tolerence: unknown key"), std::string::npos) << m;
+}
+
+// Two tets sharing the face (7, 300, 12): tet 3 in the physical volume "soft", tet 4 in "bone",
+// the triangle (50, 7, 300) in the surface "base plate".
+constexpr const char* kTwoRegions = R"($MeshFormat
+2.2 0 8
+$EndMeshFormat
+$PhysicalNames
+3
+2 5 "base plate"
+3 1 "soft"
+3 2 "bone"
+$EndPhysicalNames
+$Nodes
+5
+50 0 0 0
+7 1 0 0
+300 0 1 0
+12 0 0 1
+9 1 1 1
+$EndNodes
+$Elements
+3
+2 2 2 5 1 50 7 300
+3 4 2 1 1 50 7 300 12
+4 4 2 2 2 7 300 12 9
+$EndElements
+)";
+
+// One body per region of kTwoRegions, and a body with both regions and a material per region.
+const char* kRegions = R"({
+  "bodies": [
+    {"name": "soft", "mesh": {"file": "two.msh", "regions": ["soft"]},
+     "material": {"model": "neo_hookean", "mu": 1, "lambda": 1}},
+    {"name": "bone", "mesh": {"file": "two.msh", "regions": ["bone"]}, "rigid": true},
+    {"name": "both", "mesh": {"file": "two.msh", "translate": [5, 0, 0]},
+     "materials": {"soft": {"model": "neo_hookean", "mu": 1, "lambda": 1},
+                   "bone": {"model": "neo_hookean", "mu": 100, "lambda": 100}}}],
+  "boundary": [{"type": "fixed", "nodes": {"set": "base plate"}}]
+})";
+
+class RegionSceneTest : public SceneFileTest {
+ protected:
+  void SetUp() override {
+    SceneFileTest::SetUp();
+    std::ofstream(dir / "two.msh") << kTwoRegions;
+  }
+};
+
+TEST_F(RegionSceneTest, BodiesTakeRegionsOfAFileAndAMaterialPerRegion) {
+  const Scene s = load_scene(write(kRegions));
+  ASSERT_EQ(s.mesh.bodies.size(), 3u);
+  EXPECT_EQ(s.mesh.bodies[0].num_nodes, 4);  // nodes 50, 7, 300, 12
+  EXPECT_EQ(s.mesh.bodies[1].num_nodes, 4);  // nodes 7, 300, 12, 9
+  EXPECT_EQ(s.mesh.bodies[2].num_nodes, 5);
+  // Groups: the soft body, then the two regions of "both" (tets 3 and 4 of the scene).
+  ASSERT_EQ(s.groups.size(), 3u);
+  EXPECT_EQ(s.groups[1].tets, (std::vector<Index>{2}));
+  EXPECT_EQ(s.groups[2].tets, (std::vector<Index>{3}));
+  EXPECT_EQ(material_moduli(s.groups[2].material).mu, 100);
+  // Each body keeps the nodes of "base plate" it has: all three in "soft" (scene nodes 0, 1, 2)
+  // and "both" (8, 9, 10), nodes 7 and 300 in "bone" (4, 5).
+  const std::vector<Index> base = {0, 1, 2, 4, 5, 8, 9, 10};
+  EXPECT_EQ(s.mesh.node_sets.at("base plate"), base);
+  EXPECT_EQ(s.constraints.back().nodes, base);
+  // Every physical volume is also a node set; "body" restricts a set to one body.
+  const Scene r = load_scene(
+      write(kRegions), {parse_override(R"(boundary.0.nodes={"set": "bone", "body": "both"})")});
+  EXPECT_EQ(r.constraints.back().nodes, (std::vector<Index>{9, 10, 11, 12}));
+}
+
+TEST_F(RegionSceneTest, RegionAndSetErrorsNameFileKeyAndChoices) {
+  EXPECT_NE(error(replaced(kRegions, "\"regions\": [\"soft\"]", "\"regions\": [\"fat\"]"))
+                .find("scene.json: bodies[0].mesh.regions: "),
+            std::string::npos);
+  EXPECT_NE(error(replaced(kRegions, "\"regions\": [\"soft\"]", "\"regions\": [\"fat\"]"))
+                .find("two.msh: no region 'fat' (the mesh has 'soft', 'bone')"),
+            std::string::npos);
+  EXPECT_NE(error(replaced(kRegions, "\"bone\": {\"model\"", "\"bones\": {\"model\""))
+                .find("bodies[2].materials.bones: the body has no region 'bones' (its regions: "
+                      "'soft', 'bone')"),
+            std::string::npos);
+  EXPECT_NE(error(replaced(kRegions,
+                           ",\n                   \"bone\": {\"model\": \"neo_hookean\", "
+                           "\"mu\": 100, \"lambda\": 100}",
+                           ""))
+                .find("bodies[2].materials.bone: missing material for this region"),
+            std::string::npos);
+  EXPECT_NE(error(replaced(kValid, "\"material\"", "\"materials\""))
+                .find("bodies[0].materials: "
+                      "the body's mesh has no "
+                      "regions"),
+            std::string::npos);
+  EXPECT_NE(error(replaced(kRegions, "\"set\": \"base plate\"", "\"set\": \"top\""))
+                .find("boundary[0].nodes.set: no node set 'top' (the meshes have 'base plate', "
+                      "'bone', 'soft')"),
+            std::string::npos);
+  // The plane x = 5 holds nodes of "both" only.
+  EXPECT_NE(error(replaced(kRegions, "\"set\": \"base plate\"",
+                           "\"plane\": {\"normal\": [1, 0, 0], \"offset\": 5}, \"body\": \"soft\""))
+                .find("boundary[0].nodes: selects no nodes"),
+            std::string::npos);
 }
 
 }  // namespace

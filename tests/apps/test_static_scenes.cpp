@@ -8,6 +8,7 @@
 #include <set>
 
 #include "apps/scene_runner.hpp"
+#include "core/mesh_generators.hpp"
 #include "core/results_file.hpp"
 #include "materials/closed_forms.hpp"
 
@@ -221,16 +222,80 @@ TEST(StaticScenes, ReactionsOfAQuarterModelSumToTheAppliedLoad) {
 
 // Every scene shipped in apps/scenes is run by some test; this list is checked against the folder.
 TEST(StaticScenes, EveryShippedSceneIsTested) {
-  const std::set<std::string> tested = {"cantilever_gravity", "uniaxial_block", "twist_bar",
-                                        "buckling_column",    "blocks_overlap", "ball_drop",
-                                        "sliding_blocks",     "falling_bars",   "bars_drop",
-                                        "hertz_sphere",       "fold_slab"};
+  const std::set<std::string> tested = {"cantilever_gravity", "uniaxial_block",      "twist_bar",
+                                        "buckling_column",    "blocks_overlap",      "ball_drop",
+                                        "sliding_blocks",     "falling_bars",        "bars_drop",
+                                        "hertz_sphere",       "fold_slab",           "knee_flexion",
+                                        "knee_flexion_fine",  "knee_flexion_veronda"};
   for (const auto& entry :
        std::filesystem::directory_iterator(std::string(DEPTHFEM_SOURCE_DIR) + "/apps/scenes")) {
     if (entry.path().extension() != ".json") continue;
     EXPECT_TRUE(tested.count(entry.path().stem().string())) << entry.path() << " has no test";
     EXPECT_NO_THROW(load_scene(entry.path().string()));
   }
+}
+
+// A bar whose half x > 0.5 is a million times stiffer than the other (one mesh file, a material
+// per region), stretched 5 % by its ends: the stiff half moves as a rigid block, so the soft half
+// must match a soft bar alone whose end is displaced, to the stiff half's own stretch.
+TEST(StaticScenes, SoftRegionBesideAStiffOneMatchesTheSoftBarAlone) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / "depthfem_test_stiff_region";
+  std::filesystem::create_directories(dir);
+  const TetMesh bar = box_mesh({Vec3(0, 0, 0), Vec3(1, 0.1, 0.1), Eigen::Vector3i(10, 2, 2)});
+  {
+    std::ofstream msh(dir / "bar.msh");
+    msh.precision(17);
+    msh << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n3 1 \"soft\"\n"
+        << "3 2 \"stiff\"\n$EndPhysicalNames\n$Nodes\n"
+        << bar.X.rows() << "\n";
+    for (Index i = 0; i < bar.X.rows(); ++i)
+      msh << i + 1 << " " << bar.X(i, 0) << " " << bar.X(i, 1) << " " << bar.X(i, 2) << "\n";
+    msh << "$EndNodes\n$Elements\n" << bar.tets.rows() << "\n";
+    for (Index t = 0; t < bar.tets.rows(); ++t) {
+      double cx = 0;
+      for (int c = 0; c < 4; ++c) cx += bar.X(bar.tets(t, c), 0) / 4;
+      msh << t + 1 << " 4 2 " << (cx < 0.5 ? 1 : 2) << " 1";
+      for (int c = 0; c < 4; ++c) msh << " " << bar.tets(t, c) + 1;
+      msh << "\n";
+    }
+    msh << "$EndElements\n";
+  }
+  const std::string soft = R"({"model": "neo_hookean", "youngs": 1e5, "poisson": 0.3})";
+  const auto scene = [&](const std::string& name, const std::string& body, double end) {
+    std::ofstream((dir / (name + ".json")).string())
+        << R"({"bodies": [)" << body << R"(], "boundary": [
+          {"type": "fixed", "nodes": {"plane": {"normal": [1, 0, 0], "offset": 0}}},
+          {"type": "displaced", "displacement": [0.05, 0, 0],
+           "nodes": {"plane": {"normal": [1, 0, 0], "offset": )"
+        << end << "}}}]}";
+    return load_scene((dir / (name + ".json")).string());
+  };
+  const Scene both = scene("both", R"({"name": "bar", "mesh": {"file": "bar.msh"},
+      "materials": {"soft": )" + soft + R"(, "stiff": {"model": "neo_hookean", "youngs": 1e11,
+      "poisson": 0.3}}})",
+                           1.0);
+  const Scene alone = scene("alone",
+                            R"({"name": "bar", "mesh": {"file": "bar.msh",
+      "regions": ["soft"]}, "material": )" +
+                                soft + "}",
+                            0.5);
+  const RunResult a = run(both), b = run(alone);
+  ASSERT_TRUE(a.success) << a.message;
+  ASSERT_TRUE(b.success) << b.message;
+  // The soft nodes keep their order in both meshes.
+  double worst = 0;
+  Index k = 0;
+  for (Index i = 0; i < both.mesh.num_nodes(); ++i) {
+    if (both.mesh.X(i, 0) > 0.5 + 1e-12) continue;
+    ASSERT_TRUE(both.mesh.X.row(i) == alone.mesh.X.row(k));
+    worst = std::max(worst, (a.x.row(i) - b.x.row(k)).norm());
+    ++k;
+  }
+  EXPECT_EQ(k, alone.mesh.num_nodes());
+  // The stiff half stretches 1e-6 as much as the soft one: about 5e-8 m.
+  EXPECT_LT(worst, 5e-7);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -48,6 +48,36 @@ TEST(MaterialDepthContact, UndeformedBodiesWithSelfContactHaveNoContactForces) {
 
 // Two boxes overlapping by a third of the upper one's height, with self-contact on; random
 // perturbations make every clip case appear. Finite differences re-run the pair search.
+// A box resting on a wider one: the faces touch with zero depth, which is no contact area.
+// Pressed 1 mm in, the upper box's bottom face (0.4 x 0.4 m, at least a cell from the lower box's
+// sides, so inside tets with positive depth) counts in full; the lower box's top face inside the
+// upper box counts where the upper box's tets have depth (not in its edge tets, all of whose
+// nodes lie on its surface), so at most as much again.
+TEST(MaterialDepthContact, TouchingAtRestIsNoContactArea) {
+  Mesh m;
+  m.add_body("low", box_mesh({Vec3(0, 0, 0), Vec3(1, 1, 0.4), Eigen::Vector3i(10, 10, 2)}));
+  m.add_body("high",
+             box_mesh({Vec3(0.3, 0.3, 0.4), Vec3(0.7, 0.7, 0.8), Eigen::Vector3i(4, 4, 4)}));
+  MaterialDepthContact c(m, material_depth(m), {1e6, false});
+  c.begin_step(m.X);
+  Evaluated rest;
+  evaluate(c, m.X, rest);
+  EXPECT_GT(c.stats().active, 0) << "the faces touch";
+  StepRecord at_rest;
+  c.report(m.X, at_rest);
+  EXPECT_EQ(at_rest.contact_area(), 0.0);
+  EXPECT_EQ(rest.energy, 0.0);
+  Points x = m.X;
+  const Body& high = m.bodies[1];
+  x.col(2).segment(high.first_node, high.num_nodes).array() -= 0.001;
+  Evaluated pressed;
+  evaluate(c, x, pressed);
+  StepRecord step;
+  c.report(x, step);
+  EXPECT_GE(step.contact_area(), 0.16 - 1e-9);
+  EXPECT_LE(step.contact_area(), 0.32 + 1e-9);
+}
+
 TEST(MaterialDepthContact, AssembledDerivativesMatchFiniteDifferences) {
   Mesh m;
   m.add_body("low", box_mesh({Vec3(0, 0, 0), Vec3(1, 1, 0.4), Eigen::Vector3i(4, 4, 2)}));

@@ -110,6 +110,79 @@ $NodeData
 $EndNodeData
 )";
 
+// MSH 4.1 with physical groups: tet 1 in volume "soft" (tag 1), tet 2 in volume "bone" (tag 2,
+// listed negated as Gmsh does for a reversed orientation), the triangle (50, 7, 300) in the
+// surface "base plate" and node 9 in the unnamed point group 7. Entities on lines 12 to 15.
+constexpr const char* kMsh41Groups = R"($MeshFormat
+4.1 0 8
+$EndMeshFormat
+$PhysicalNames
+3
+2 5 "base plate"
+3 1 "soft"
+3 2 "bone"
+$EndPhysicalNames
+$Entities
+1 0 1 2
+1 1.6 1.3 1.8 1 7
+1 0 0 0 2 2 2 1 5 0
+1 0 0 0 2 2 2 1 1 0
+2 0 0 0 2 2 2 1 -2 0
+$EndEntities
+$Nodes
+1 5 1 300
+3 1 0 5
+50
+7
+300
+12
+9
+0.1 -0.2 0.3
+1.6 -0.2 0.3
+0.1 1.3 0.3
+0.1 -0.2 1.8
+1.6 1.3 1.8
+$EndNodes
+$Elements
+4 4 1 4
+0 1 15 1
+1 9
+2 1 2 1
+2 50 7 300
+3 1 4 1
+3 50 7 300 12
+3 2 4 1
+4 7 300 12 9
+$EndElements
+)";
+
+// The same groups in MSH 2.2 (the first element tag is the physical group); tets on lines 22, 23.
+constexpr const char* kMsh22Groups = R"($MeshFormat
+2.2 0 8
+$EndMeshFormat
+$PhysicalNames
+3
+2 5 "base plate"
+3 1 "soft"
+3 2 "bone"
+$EndPhysicalNames
+$Nodes
+5
+50 0.1 -0.2 0.3
+7 1.6 -0.2 0.3
+300 0.1 1.3 0.3
+12 0.1 -0.2 1.8
+9 1.6 1.3 1.8
+$EndNodes
+$Elements
+4
+1 15 2 7 1 9
+2 2 2 5 1 50 7 300
+3 4 2 1 1 50 7 300 12
+4 4 2 2 2 7 300 12 9
+$EndElements
+)";
+
 // TetGen pair numbered from 0, with comments, a blank line, one attribute and boundary markers.
 constexpr const char* kTetgenNode0 = R"(# five points, one attribute, boundary markers
 5 3 1 1
@@ -293,10 +366,17 @@ TEST_F(ReadersTest, GmshMissingEndLineIsAnError) {
 }
 
 TEST_F(ReadersTest, GmshTruncatedInsideSkippedSectionIsAnError) {
-  const std::string file = write("cut.msh", first_lines(kMsh22, 6));
+  const std::string file = write("cut.msh", first_lines(kMsh41, 37));
   EXPECT_TRUE(throws_input_error(
       [&] { read_gmsh(file); },
-      {"cut.msh:6:", "file ends inside $PhysicalNames (started at line 4, no $EndPhysicalNames)"}));
+      {"cut.msh:37:", "file ends inside $NodeData (started at line 35, no $EndNodeData)"}));
+}
+
+TEST_F(ReadersTest, GmshTruncatedInsidePhysicalNamesIsAnError) {
+  const std::string file = write("cut.msh", first_lines(kMsh22, 6));
+  EXPECT_TRUE(
+      throws_input_error([&] { read_gmsh(file); },
+                         {"cut.msh:6:", "file ends inside $PhysicalNames (no $EndPhysicalNames)"}));
 }
 
 TEST_F(ReadersTest, Gmsh41TruncatedInsideNodesIsAnError) {
@@ -420,6 +500,67 @@ TEST_F(ReadersTest, GmshWithoutTetsIsAnError) {
   const std::string file = write("surface.msh", text);
   EXPECT_TRUE(throws_input_error([&] { read_gmsh(file); },
                                  {"surface.msh", "contains no 4-node tetrahedra"}));
+}
+
+// Regions and node sets of kMsh41Groups / kMsh22Groups (node indices in file order).
+void expect_reference_groups(const LoadedMesh& loaded) {
+  expect_reference_mesh(loaded);
+  EXPECT_EQ(loaded.region_names, (std::vector<std::string>{"soft", "bone"}));
+  EXPECT_EQ(loaded.tet_region, (std::vector<Index>{0, 1}));
+  const NodeSets expected = {
+      {"base plate", {0, 1, 2}}, {"soft", {0, 1, 2, 3}}, {"bone", {1, 2, 3, 4}}, {"7", {4}}};
+  EXPECT_EQ(loaded.node_sets, expected);
+}
+
+TEST_F(ReadersTest, Gmsh41PhysicalGroupsBecomeRegionsAndNodeSets) {
+  expect_reference_groups(read_gmsh(write("groups.msh", kMsh41Groups)));
+}
+
+TEST_F(ReadersTest, Gmsh22PhysicalGroupsBecomeRegionsAndNodeSets) {
+  expect_reference_groups(read_gmsh(write("groups.msh", kMsh22Groups)));
+}
+
+TEST_F(ReadersTest, GmshWithoutPhysicalVolumesHasNoRegions) {
+  const LoadedMesh loaded = read_gmsh(write("mesh.msh", kMsh41));
+  EXPECT_TRUE(loaded.region_names.empty());
+  EXPECT_TRUE(loaded.tet_region.empty());
+  EXPECT_TRUE(loaded.node_sets.empty());
+}
+
+TEST_F(ReadersTest, GmshPhysicalNamesMayHoldSpaces) {
+  const LoadedMesh loaded =
+      read_gmsh(write("names.msh", replace_line(kMsh22Groups, 7, "3 1 \"soft  tissue\"")));
+  EXPECT_EQ(loaded.region_names[0], "soft  tissue");
+}
+
+TEST_F(ReadersTest, GmshTetInTwoRegionsIsAnError) {
+  const std::string file =
+      write("two.msh", replace_line(kMsh41Groups, 15, "2 0 0 0 2 2 2 2 1 2 0"));
+  EXPECT_TRUE(throws_input_error(
+      [&] { read_gmsh(file); },
+      {"two.msh:40:", "element 4 belongs to the physical volumes 'bone' and 'soft'"}));
+}
+
+TEST_F(ReadersTest, GmshTetWithoutRegionBesideOthersIsAnError) {
+  const std::string file =
+      write("none.msh", replace_line(kMsh22Groups, 23, "4 4 2 0 2 7 300 12 9"));
+  EXPECT_TRUE(throws_input_error(
+      [&] { read_gmsh(file); },
+      {"none.msh:23:",
+       "element 4 belongs to no physical volume, but element 3 belongs to 'soft'"}));
+}
+
+TEST_F(ReadersTest, GmshUnquotedPhysicalNameIsAnError) {
+  const std::string file = write("quote.msh", replace_line(kMsh22Groups, 6, "2 5 base"));
+  EXPECT_TRUE(throws_input_error([&] { read_gmsh(file); },
+                                 {"quote.msh:6:", "physical name must be in double quotes"}));
+}
+
+TEST_F(ReadersTest, GmshGroupElementWithUndefinedNodeIsAnError) {
+  const std::string file = write("tri.msh", replace_line(kMsh22Groups, 21, "2 2 2 5 1 50 7 301"));
+  EXPECT_TRUE(
+      throws_input_error([&] { read_gmsh(file); },
+                         {"tri.msh:21:", "element 2 references node 301, which is not defined"}));
 }
 
 // ---- TetGen ----------------------------------------------------------------------------------

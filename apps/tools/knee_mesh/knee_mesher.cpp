@@ -454,6 +454,93 @@ TetMesh improve_with_tetgen(const TetMesh& in, const std::string& work) {
   return out;
 }
 
+// The six dihedral angles [degrees] of tet t.
+std::array<double, 6> tet_dihedrals(const TetMesh& m, const std::array<long, 4>& t) {
+  std::array<std::array<double, 3>, 4> n;  // outward face normals, face k opposite vertex k
+  const std::array<Face, 4> faces = tet_faces(t);
+  for (int k = 0; k < 4; ++k) {
+    const auto& a = m.xyz[faces[k][0]];
+    const auto& b = m.xyz[faces[k][1]];
+    const auto& c = m.xyz[faces[k][2]];
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    n[k] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+    const double len = std::sqrt(n[k][0] * n[k][0] + n[k][1] * n[k][1] + n[k][2] * n[k][2]);
+    for (double& x : n[k]) x /= len;
+  }
+  // The dihedral angle along the edge shared by faces j and k is pi minus the angle between
+  // their outward normals.
+  std::array<double, 6> out;
+  int e = 0;
+  for (int j = 0; j < 4; ++j)
+    for (int k = j + 1; k < 4; ++k) {
+      const double dot = n[j][0] * n[k][0] + n[j][1] * n[k][1] + n[j][2] * n[k][2];
+      out[e++] = 180.0 - std::acos(std::clamp(dot, -1.0, 1.0)) * 180.0 / M_PI;
+    }
+  return out;
+}
+
+// Dihedral angles [degrees] of every tet of label l (6 per tet), sorted.
+std::vector<double> dihedral_angles(const TetMesh& m, int l) {
+  std::vector<double> out;
+  for (size_t i = 0; i < m.tets.size(); ++i) {
+    if (m.label[i] != l) continue;
+    const std::array<double, 6> d = tet_dihedrals(m, m.tets[i]);
+    out.insert(out.end(), d.begin(), d.end());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// Splits at its centroid every tet whose four vertices all lie on the boundary of its region,
+// where the four new tets keep a dihedral angle of at least kMinSplitDihedral. Material depth
+// (the distance to the body's surface) is interpolated linearly from the nodes, so such a tet
+// has zero depth throughout and contact cannot push anything out of it; its centroid is an
+// interior point with positive depth. A flat tet (a sliver along the surface, whose interior is
+// no deeper than its nodes) would split into slivers and is left as it is. Returns the number
+// split and the number left.
+constexpr double kMinSplitDihedral = 5.0;
+
+std::pair<long, long> split_boundary_tets(TetMesh& m) {
+  std::vector<std::vector<char>> on_boundary(kNumLabels + 1, std::vector<char>(m.xyz.size(), 0));
+  for (int l = 1; l <= kNumLabels; ++l)
+    for (const Face& f : boundary_faces(m, l))
+      for (long v : f) on_boundary[l][v] = 1;
+  const size_t n = m.tets.size();
+  long split = 0, left = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const std::array<long, 4> t = m.tets[i];
+    bool all = true;
+    for (long v : t) all = all && on_boundary[m.label[i]][v];
+    if (!all) continue;
+    std::array<double, 3> centroid = {0, 0, 0};
+    for (long v : t)
+      for (int c = 0; c < 3; ++c) centroid[c] += m.xyz[v][c] / 4;
+    const long p = static_cast<long>(m.xyz.size());
+    m.xyz.push_back(centroid);
+    // Replacing vertex k by the centroid in turn gives four positive tets filling the old one.
+    std::array<std::array<long, 4>, 4> sub;
+    double worst = 180;
+    for (int k = 0; k < 4; ++k) {
+      sub[k] = t;
+      sub[k][k] = p;
+      for (double d : tet_dihedrals(m, sub[k])) worst = std::min(worst, d);
+    }
+    if (worst < kMinSplitDihedral) {
+      m.xyz.pop_back();
+      ++left;
+      continue;
+    }
+    m.tets[i] = sub[0];
+    for (int k = 1; k < 4; ++k) {
+      m.tets.push_back(sub[k]);
+      m.label.push_back(m.label[i]);
+    }
+    ++split;
+  }
+  return {split, left};
+}
+
 // ---------------------------------------------------------------------------------------------
 // Surface groups and output.
 
@@ -531,36 +618,6 @@ std::vector<Group> surface_groups(const TetMesh& m, const Anatomy& anatomy) {
     }
   }
   return groups;
-}
-
-// Dihedral angles [degrees] of every tet (6 per tet).
-std::vector<double> dihedral_angles(const TetMesh& m, int l) {
-  std::vector<double> out;
-  for (size_t i = 0; i < m.tets.size(); ++i) {
-    if (m.label[i] != l) continue;
-    const auto& t = m.tets[i];
-    std::array<std::array<double, 3>, 4> n;  // outward face normals, face k opposite vertex k
-    const std::array<Face, 4> faces = tet_faces(t);
-    for (int k = 0; k < 4; ++k) {
-      const auto& a = m.xyz[faces[k][0]];
-      const auto& b = m.xyz[faces[k][1]];
-      const auto& c = m.xyz[faces[k][2]];
-      const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-      const double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-      n[k] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
-      const double len = std::sqrt(n[k][0] * n[k][0] + n[k][1] * n[k][1] + n[k][2] * n[k][2]);
-      for (double& x : n[k]) x /= len;
-    }
-    // The dihedral angle along the edge shared by faces j and k is pi minus the angle between
-    // their outward normals.
-    for (int j = 0; j < 4; ++j)
-      for (int k = j + 1; k < 4; ++k) {
-        const double dot = n[j][0] * n[k][0] + n[j][1] * n[k][1] + n[j][2] * n[k][2];
-        out.push_back(180.0 - std::acos(std::clamp(dot, -1.0, 1.0)) * 180.0 / M_PI);
-      }
-  }
-  std::sort(out.begin(), out.end());
-  return out;
 }
 
 double percentile(const std::vector<double>& sorted_values, double q) {
@@ -841,12 +898,17 @@ int main(int argc, char** argv) {
     std::cerr << "knee_mesher: CGAL: " << mesh.xyz.size() << " vertices, " << mesh.tets.size()
               << " tets\n";
     mesh = improve_with_tetgen(mesh, o.work);
+    const auto [split, left] = split_boundary_tets(mesh);
     const std::vector<Group> groups = surface_groups(mesh, a);
     write_msh(mesh, groups, o.out);
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const Axis axis = flexion_axis(*a.femur);
-    const std::string stats = statistics(mesh, groups, o, axis, sweep_clearance(a, axis));
+    const std::string stats =
+        statistics(mesh, groups, o, axis, sweep_clearance(a, axis)) +
+        "\ntets with all four vertices on their region's boundary: " + std::to_string(split) +
+        " split at their centroid, " + std::to_string(left) + " left (they would split into " +
+        "tets with a dihedral angle below 5 degrees)\n";
     std::cerr << "knee_mesher: " << o.out << " in " << seconds << " s\n";
     std::cout << stats;
     if (!o.stats.empty()) std::ofstream(o.stats) << stats;

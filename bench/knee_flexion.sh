@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Scene benchmark of the paper's knee (section 6): runs a knee-flexion scene and writes its
+# figures to bench/results/ (rerun it after a change to the solver or the kernels to compare):
+#   knee_flexion[_TAG]_steps.csv   per step: angle, Newton iterations, seconds, penetration, area
+#   knee_flexion[_TAG]_timing.csv  the breakdown beside the paper's (seconds, share of the wall)
+#   knee_flexion[_TAG].md          the same as Markdown tables, with total wall time, Newton
+#                                  iterations per step and the speed-up over the paper's 376 min
+#   knee_flexion[_TAG].log         the run's own output
+# Usage (from the repository root, after building):
+#   bench/knee_flexion.sh [SCENE.json [TAG [depthfem options...]]]
+#   bench/knee_flexion.sh                                  # apps/scenes/knee_flexion.json
+#   bench/knee_flexion.sh apps/scenes/knee_flexion_fine.json fine
+set -euo pipefail
+scene=${1:-apps/scenes/knee_flexion.json}
+tag=${2:+_$2}
+shift $(($# < 2 ? $# : 2))
+out=bench/results/knee_flexion$tag
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+status=0
+build/apps/depthfem run "$scene" --out "$tmp/run.h5" "$@" > "$out.log" 2>&1 || status=$?
+/usr/bin/python3 bench/knee_report.py "$tmp/run.h5" "$out.log" "$out"
+exit $status

@@ -1,0 +1,99 @@
+// The knee-flexion scene (apps/scenes/knee_flexion.json), shortened to its first small steps on
+// the paper-size mesh: the scene loads as meant (bodies, regions, node sets, conditions), every
+// step converges, no tet inverts, and the deepest penetration stays below the scene's 1 mm target.
+#include <gtest/gtest.h>
+
+#include <sstream>
+
+#include "apps/scene_runner.hpp"
+#include "core/tet_mesh.hpp"
+
+namespace depthfem {
+namespace {
+
+using testing::load;
+using testing::run;
+
+// The smallest signed volume of the tets at positions x, relative to the tet's rest volume.
+double smallest_volume_ratio(const Mesh& mesh, const Points& x) {
+  double smallest = 1e300;
+  for (Index t = 0; t < mesh.num_tets(); ++t) {
+    const auto corner = [&](const Points& p, int c) -> Vec3 { return p.row(mesh.tets(t, c)); };
+    const double now = signed_volume(corner(x, 0), corner(x, 1), corner(x, 2), corner(x, 3));
+    const double rest =
+        signed_volume(corner(mesh.X, 0), corner(mesh.X, 1), corner(mesh.X, 2), corner(mesh.X, 3));
+    smallest = std::min(smallest, now / rest);
+  }
+  return smallest;
+}
+
+TEST(KneeScene, LoadsBodiesRegionsAndConditions) {
+  const Scene s = load("knee_flexion");
+  ASSERT_EQ(s.mesh.bodies.size(), 3u);
+  EXPECT_EQ(s.mesh.bodies[0].name, "femur");
+  EXPECT_EQ(s.rigid, (std::vector<bool>{true, true, false}));
+  // The leg: soft tissue and patella, one material each.
+  ASSERT_EQ(s.groups.size(), 2u);
+  EXPECT_GT(s.groups[0].tets.size(), 10 * s.groups[1].tets.size());
+  // Rigid holds, the flexion, the soft tissue on the tibia, the thigh cut in its plane.
+  ASSERT_EQ(s.constraints.size(), 5u);
+  const Body& leg = s.mesh.bodies[2];
+  EXPECT_EQ(s.constraints[2].nodes.size(), static_cast<size_t>(s.mesh.bodies[1].num_nodes));
+  for (const Index i : s.constraints[3].nodes) EXPECT_GE(i, leg.first_node);
+  for (const Index i : s.constraints[4].nodes) {
+    EXPECT_GE(i, leg.first_node);
+    EXPECT_NEAR(s.mesh.X(i, 2), 0.590, 1e-12) << "thigh_cut node off the cut plane";
+  }
+}
+
+// The fine variant is the same scene on a mesh with more than three times the tets (a run of it
+// is a benchmark: bench/knee_flexion.sh).
+TEST(KneeScene, FineVariantDiffersOnlyInItsMesh) {
+  const Scene coarse = load("knee_flexion"), fine = load("knee_flexion_fine");
+  EXPECT_GT(fine.mesh.num_tets(), 3 * coarse.mesh.num_tets());
+  ASSERT_EQ(fine.constraints.size(), coarse.constraints.size());
+  for (size_t k = 0; k < fine.constraints.size(); ++k)
+    EXPECT_EQ(fine.constraints[k].name, coarse.constraints[k].name);
+  EXPECT_EQ(fine.contact_options.penalty, coarse.contact_options.penalty);
+  EXPECT_EQ(fine.groups.size(), coarse.groups.size());
+}
+
+// The Veronda variant: the same scene with the soft tissue's model swapped, at the same
+// small-strain moduli (shear 10 kPa, Poisson's ratio 0.452).
+TEST(KneeScene, VerondaVariantHasTheMooneyRivlinSmallStrainModuli) {
+  const Scene mr = load("knee_flexion"), veronda = load("knee_flexion_veronda");
+  ASSERT_TRUE(std::holds_alternative<Veronda>(veronda.groups[0].material));
+  const LinearizedModuli a = material_moduli(mr.groups[0].material);
+  const LinearizedModuli b = material_moduli(veronda.groups[0].material);
+  EXPECT_NEAR(a.mu, 1e4, 1e-6);
+  EXPECT_NEAR(b.mu, 1e4, 1e-6);
+  EXPECT_NEAR(a.poisson(), 0.45, 5e-3);
+  EXPECT_NEAR(b.poisson(), a.poisson(), 1e-5);
+  EXPECT_EQ(veronda.mesh.num_tets(), mr.mesh.num_tets());
+}
+
+// Three steps of 0.5 degrees (the full run's steps of 3 degrees take minutes each on the first
+// steps, before the tissue has taken up the contact).
+TEST(KneeScene, FirstStepsConvergeWithoutInversionOrDeepPenetration) {
+  const Scene s = load("knee_flexion", {"boundary.0.angle_deg=1.5", "boundary.1.angle_deg=1.5",
+                                        "solver.initial_increment=0.3333333333333333",
+                                        "solver.max_increment=0.3333333333333333"});
+  std::vector<double> worst_volume;
+  RunOptions options;
+  options.observer = [&](const StepRecord&, const Points& x) {
+    worst_volume.push_back(smallest_volume_ratio(s.mesh, x));
+  };
+  std::ostringstream log;
+  const RunResult r = run_scene(s, options, log);
+  ASSERT_TRUE(r.success) << r.message << "\n" << log.str();
+  ASSERT_GE(r.steps.size(), 3u);
+  EXPECT_NEAR(r.steps.back().load, 1.0, 1e-12);
+  for (size_t k = 0; k < r.steps.size(); ++k) {
+    EXPECT_GT(worst_volume[k], 0.0) << "a tet inverted at step " << k;
+    ASSERT_TRUE(r.steps[k].penetration.has_value());
+    EXPECT_LT(*r.steps[k].penetration, 1e-3) << "step " << k;
+  }
+}
+
+}  // namespace
+}  // namespace depthfem
