@@ -22,6 +22,7 @@
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
+#include <experimental/simd>
 #include <numeric>
 #include <random>
 
@@ -59,7 +60,10 @@ const Scene& scene() {
 }
 
 // ---- Layouts. Each gives the scalar kernel one row (input, node) and the batched kernel W rows
-// starting at a row of the same chunk; rows are those of the TetBlock, chunks and colors too.
+// starting at a row of the same chunk (inputs and node indices); rows are those of the TetBlock,
+// chunks and colors too.
+
+using BatchNodes = std::array<std::array<Index, kLanes>, 4>;  // [corner][lane]
 
 // SoA: the TetBlock itself (one array per column) and positions with one array per component.
 struct SoA {
@@ -69,7 +73,9 @@ struct SoA {
   Index node(Index, Index e, int a) const { return b.nodes(e, a); }
   TetInput input(Index, Index e) const { return tet_input(b, x, e); }
   template <class V>
-  TetBatchInput<V> batch(Index, Index e) const {
+  TetBatchInput<V> batch(Index, Index e, BatchNodes& nodes) const {
+    for (int a = 0; a < 4; ++a)
+      for (int l = 0; l < V::kWidth; ++l) nodes[a][l] = b.nodes(e + l, a);
     return tet_batch_input<V, false>(b, x, e);
   }
 };
@@ -113,9 +119,10 @@ struct AoS {
     return t;
   }
   template <class V>
-  TetBatchInput<V> batch(Index k, Index e) const {
+  TetBatchInput<V> batch(Index k, Index e, BatchNodes& nodes) const {
     TetBatchInput<V> in;
     for (int l = 0; l < V::kWidth; ++l) {
+      for (int a = 0; a < 4; ++a) nodes[a][l] = node(k, e + l, a);
       const TetInput t = input(k, e + l);
       for (int k = 0; k < 9; ++k) in.Ds[k].set(l, t.Ds(k)), in.D[k].set(l, t.D(k));
       in.volume.set(l, t.volume);
@@ -179,14 +186,15 @@ struct AoSoA {
   }
   // Row e must start a block (rows are walked block by block from the start of a chunk).
   template <class V>
-  TetBatchInput<V> batch(Index k, Index e) const {
+  TetBatchInput<V> batch(Index k, Index e, BatchNodes& nodes) const {
     static_assert(V::kWidth == kLanes);
     const TetLanesRecord& r = *at(k, e).first;
+    for (int a = 0; a < 4; ++a) std::copy_n(r.nodes[a], kLanes, nodes[a].begin());
     TetBatchInput<V> in;
     for (int c = 0; c < 3; ++c) {
       const double* xc = x.col(c).data();
-      const V x0 = gather<kLanes>(xc, r.nodes[0]);
-      for (int a = 1; a < 4; ++a) in.Ds[3 * (a - 1) + c] = gather<kLanes>(xc, r.nodes[a]) - x0;
+      const V x0 = V::gather(xc, r.nodes[0]);
+      for (int a = 1; a < 4; ++a) in.Ds[3 * (a - 1) + c] = V::gather(xc, r.nodes[a]) - x0;
     }
     for (int k = 0; k < 9; ++k) in.D[k] = V::load(r.Dm_inv[k]);
     in.volume = V::load(r.volume);
@@ -264,6 +272,54 @@ void set_counters(benchmark::State& state, double tets, int threads, double flop
   state.counters["bytes_per_tet"] = bytes;
 }
 
+// ---- The same lanes written with std::experimental::simd (GCC 12's), as the comparison of how
+// lanes are written: its arithmetic maps onto the same instructions, its exp and log call the
+// scalar functions lane by lane.
+namespace stdx = std::experimental;
+struct StdLanes;
+struct StdMask {
+  stdx::simd_mask<double, stdx::simd_abi::deduce_t<double, kLanes>> m;
+  bool any() const { return stdx::any_of(m); }
+};
+struct StdLanes {
+  using Simd = stdx::simd<double, stdx::simd_abi::deduce_t<double, kLanes>>;
+  static constexpr int kWidth = kLanes;
+  Simd v;
+  StdLanes() = default;
+  StdLanes(double s) : v(s) {}       // NOLINT: like Lanes
+  StdLanes(const Simd& s) : v(s) {}  // NOLINT
+  static StdLanes load(const double* p) { return Simd(p, stdx::element_aligned); }
+  static StdLanes gather(const double* base, const Index* index) {
+    return Simd([&](auto l) { return base[index[l]]; });
+  }
+  double operator[](int l) const { return v[l]; }
+  void set(int l, double x) { v[l] = x; }
+  friend StdLanes operator+(const StdLanes& a, const StdLanes& b) { return a.v + b.v; }
+  friend StdLanes operator-(const StdLanes& a, const StdLanes& b) { return a.v - b.v; }
+  friend StdLanes operator*(const StdLanes& a, const StdLanes& b) { return a.v * b.v; }
+  friend StdLanes operator/(const StdLanes& a, const StdLanes& b) { return a.v / b.v; }
+  friend StdLanes operator-(const StdLanes& a) { return -a.v; }
+  StdLanes& operator+=(const StdLanes& b) { return v += b.v, *this; }
+  StdLanes& operator-=(const StdLanes& b) { return v -= b.v, *this; }
+  StdLanes& operator*=(const StdLanes& b) { return v *= b.v, *this; }
+  friend StdMask operator>(const StdLanes& a, const StdLanes& b) { return {a.v > b.v}; }
+  friend StdMask operator!=(const StdLanes& a, const StdLanes& b) { return {a.v != b.v}; }
+};
+StdLanes select(const StdMask& m, const StdLanes& a, const StdLanes& b) {
+  StdLanes::Simd r = b.v;
+  stdx::where(m.m, r) = a.v;
+  return r;
+}
+StdLanes multiply_add(const StdLanes& a, const StdLanes& b, const StdLanes& c) {
+  return stdx::fma(a.v, b.v, c.v);
+}
+StdLanes exp(const StdLanes& a) {
+  return stdx::exp(a.v);
+}
+StdLanes log(const StdLanes& a) {
+  return stdx::log(a.v);
+}
+
 // ---- The kernels over a layout. kOrder 0: energy; 1: + gradient scattered into a 3n vector
 // (colors keep it race-free); 2: + the 12x12 Hessian, forced into memory but not scattered (the
 // kernel, not the scatter, is measured here; BM_Assembly adds the scatter).
@@ -287,15 +343,15 @@ struct Sweep {
   }
   // The batched kernel on rows e .. e + count of chunk k (count <= W; padding lanes dropped).
   template <class V>
-  double batched(Index k, Index e, int count) const {
-    TetBatch<V> t;
-    tet_batch<kOrder>(kMaterial, L.template batch<V>(k, e), t);
+  double batched(Index k, Index e, int count, TetBatch<V>& t) const {
+    BatchNodes nodes;
+    tet_batch<kOrder>(kMaterial, L.template batch<V>(k, e, nodes), t);
     double energy = 0;
     for (int l = 0; l < count; ++l) {
       energy += t.energy[l];
       if constexpr (kOrder >= 1)
         for (int a = 0; a < 4; ++a) {
-          double* ga = g.data() + 3 * L.node(k, e + l, a);
+          double* ga = g.data() + 3 * nodes[a][l];
           for (int c = 0; c < 3; ++c) ga[c] += t.gradient[a][c][l];
         }
     }
@@ -305,22 +361,24 @@ struct Sweep {
     }
     return energy;
   }
-  // The rows of chunk k, W at a time (W = 1: the scalar kernel).
-  template <int W>
+  // The rows of chunk k, V::kWidth at a time (V = double: the scalar kernel).
+  template <class V>
   double chunk(const TetBlock& b, Index k) const {
     const Index end = b.chunk_begin[k + 1];
     double energy = 0;
     Index e = b.chunk_begin[k];
-    if constexpr (W > 1) {
-      for (; e + W <= end; e += W) energy += batched<Lanes<W>>(k, e, W);
-      if (Layout::kPadded && e < end) energy += batched<Lanes<W>>(k, e, end - e), e = end;
+    if constexpr (!std::is_same_v<V, double>) {
+      constexpr int W = V::kWidth;
+      TetBatch<V> t;
+      for (; e + W <= end; e += W) energy += batched(k, e, W, t);
+      if (Layout::kPadded && e < end) energy += batched(k, e, end - e, t), e = end;
     }
     for (; e < end; ++e) energy += scalar(k, e);
     return energy;
   }
 };
 
-template <int kOrder, class Layout, int W>
+template <int kOrder, class Layout, class V>
 void BM_Kernel(benchmark::State& state) {
   const int threads = static_cast<int>(state.range(0));
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
@@ -335,7 +393,7 @@ void BM_Kernel(benchmark::State& state) {
       tbb::parallel_for(tbb::blocked_range<Index>(b.color_begin[c], b.color_begin[c + 1], 1),
                         [&](const tbb::blocked_range<Index>& chunks) {
                           for (Index k = chunks.begin(); k < chunks.end(); ++k)
-                            chunk_energy[k] = sweep.template chunk<W>(b, k);
+                            chunk_energy[k] = sweep.template chunk<V>(b, k);
                         });
     }
     benchmark::DoNotOptimize(g.data());
@@ -411,31 +469,32 @@ void BM_Bandwidth(benchmark::State& state) {
       benchmark::Counter(24.0 * n / threads, benchmark::Counter::kIsIterationInvariantRate);
 }
 
-template <int kOrder, class Layout, int W>
+template <int kOrder, class Layout, class V>
 void register_kernel(const std::string& layout, const std::string& kernel) {
   static const char* order[kOrders] = {"Energy", "Gradient", "Hessian"};
   benchmark::RegisterBenchmark(("Kernel/" + layout + "/" + kernel + "/" + order[kOrder]).c_str(),
-                               BM_Kernel<kOrder, Layout, W>)
+                               BM_Kernel<kOrder, Layout, V>)
       ->Arg(1)
       ->Arg(2)
       ->UseRealTime()
       ->Unit(benchmark::kMillisecond);
 }
 
-template <class Layout>
-void register_layout(const std::string& name) {
-  register_kernel<0, Layout, 1>(name, "scalar");
-  register_kernel<1, Layout, 1>(name, "scalar");
-  register_kernel<2, Layout, 1>(name, "scalar");
-  register_kernel<0, Layout, kLanes>(name, "batched");
-  register_kernel<1, Layout, kLanes>(name, "batched");
-  register_kernel<2, Layout, kLanes>(name, "batched");
+template <class Layout, class V>
+void register_orders(const std::string& layout, const std::string& kernel) {
+  register_kernel<0, Layout, V>(layout, kernel);
+  register_kernel<1, Layout, V>(layout, kernel);
+  register_kernel<2, Layout, V>(layout, kernel);
 }
 
 const bool registered = [] {
-  register_layout<AoS>("AoS");
-  register_layout<SoA>("SoA");
-  register_layout<AoSoA>("AoSoA");
+  register_orders<AoS, double>("AoS", "scalar");
+  register_orders<AoS, Lanes<kLanes>>("AoS", "batched");
+  register_orders<SoA, double>("SoA", "scalar");
+  register_orders<SoA, Lanes<kLanes>>("SoA", "batched");
+  register_orders<AoSoA, double>("AoSoA", "scalar");
+  register_orders<AoSoA, Lanes<kLanes>>("AoSoA", "batched");
+  register_orders<SoA, StdLanes>("SoA", "batched_stdsimd");
   benchmark::RegisterBenchmark("Assembly/Gradient", BM_Assembly<false>)
       ->Arg(1)
       ->Arg(2)

@@ -33,14 +33,13 @@ inline TetInput tet_input(const TetBlock& b, const Points& x, Index e) {
 /// Fiber directions are read when kFiber is set.
 template <class V, bool kFiber>
 TetBatchInput<V> tet_batch_input(const TetBlock& b, const Points& x, Index e) {
-  constexpr int W = V::kWidth;
   const Index n = b.size();
   TetBatchInput<V> in;
   for (int c = 0; c < 3; ++c) {
     const double* xc = x.col(c).data();
-    const V x0 = gather<W>(xc, b.nodes.col(0).data() + e);
+    const V x0 = V::gather(xc, b.nodes.col(0).data() + e);
     for (int a = 1; a < 4; ++a)
-      in.Ds[3 * (a - 1) + c] = gather<W>(xc, b.nodes.col(a).data() + e) - x0;
+      in.Ds[3 * (a - 1) + c] = V::gather(xc, b.nodes.col(a).data() + e) - x0;
   }
   for (int k = 0; k < 9; ++k) in.D[k] = V::load(b.Dm_inv.data() + k * n + e);
   in.volume = V::load(b.volume.data() + e);
