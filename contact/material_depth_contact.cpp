@@ -4,9 +4,12 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <algorithm>
 #include <functional>
+#include <stdexcept>
 
 #include "contact/penalty.hpp"
+#include "core/element_partition.hpp"
 #include "core/lumped_mass.hpp"
 
 namespace depthfem {
@@ -68,30 +71,46 @@ void MaterialDepthContact::prepare(const Points& x) {
       });
     }
   });
-  pairs_.clear();
+  std::vector<ContactPair> all;
   stats_ = ContactStats{};
   for (Index c = 0; c < chunks; ++c) {
-    pairs_.insert(pairs_.end(), found[c].begin(), found[c].end());
+    all.insert(all.end(), found[c].begin(), found[c].end());
     stats_.candidates += candidates[c];
   }
-  stats_.active = static_cast<Index>(pairs_.size());
-  for (const ContactPair& p : pairs_) {
-    for (int k = 1; k + 1 < p.polygon.size; ++k)
+  const Index n_pairs = static_cast<Index>(all.size());
+  stats_.active = n_pairs;
+  // Processing order: pairs along a Morton curve through their polygons' centres, in chunks
+  // colored so that the chunks of a color share no node (evaluate scatters them concurrently).
+  PairNodes nodes(n_pairs, 7);
+  Points centres(n_pairs, 3);
+  for (Index k = 0; k < n_pairs; ++k) {
+    const ContactPair& p = all[k];
+    nodes.row(k) = Eigen::Map<const Eigen::Matrix<Index, 1, 7>>(pair_nodes(p).data());
+    Vec3 centre = Vec3::Zero();
+    for (int v = 0; v < p.polygon.size; ++v) centre += p.polygon.x[v];
+    centres.row(k) = centre.transpose() / p.polygon.size;
+    for (int v = 1; v + 1 < p.polygon.size; ++v)
       stats_.area +=
-          0.5 * (p.polygon.x[k] - p.polygon.x[0]).cross(p.polygon.x[k + 1] - p.polygon.x[0]).norm();
+          0.5 * (p.polygon.x[v] - p.polygon.x[0]).cross(p.polygon.x[v + 1] - p.polygon.x[0]).norm();
   }
-  // A pair whose nodes are not coupled in the bound pattern needs a new pattern.
+  const ElementPartition part =
+      partition_elements(nodes, static_cast<Index>(depth_.size()), centres, kChunk);
+  pairs_.resize(all.size());
+  nodes_.resize(n_pairs, 7);
+  for (Index k = 0; k < n_pairs; ++k) {
+    pairs_[k] = all[part.order[k]];
+    nodes_.row(k) = nodes.row(part.order[k]);
+  }
+  chunk_begin_ = part.chunk_begin;
+  color_begin_ = part.color_begin;
+  // Block offsets in the bound pattern; a pair whose nodes are not coupled there needs a new
+  // pattern (bind() then finds the offsets).
   pattern_changed_ = false;
+  offsets_.clear();
   if (bound_) {
-    for (const ContactPair& p : pairs_) {
-      const std::array<Index, 7> v = pair_nodes(p);
-      for (Index i : v)
-        for (Index j : v)
-          if (bound_->block_index(i, j) < 0) {
-            pattern_changed_ = true;
-            return;
-          }
-    }
+    offsets_ = bound_->clique_block_indices(nodes_);
+    pattern_changed_ = std::find(offsets_.begin(), offsets_.end(), -1) != offsets_.end();
+    if (pattern_changed_) offsets_.clear();
   }
 }
 
@@ -105,6 +124,9 @@ void MaterialDepthContact::add_couplings(SparsityBuilder& builder) const {
 void MaterialDepthContact::bind(const BlockSparseMatrix& hessian) {
   bound_ = &hessian;
   pattern_changed_ = false;
+  offsets_ = hessian.clique_block_indices(nodes_);
+  if (std::find(offsets_.begin(), offsets_.end(), -1) != offsets_.end())
+    throw std::logic_error("contact: the Hessian pattern lacks a pair's coupling");
 }
 
 std::array<double, 4> MaterialDepthContact::pair_depths(const ContactPair& p) const {
@@ -139,27 +161,24 @@ double MaterialDepthContact::evaluate(const Points& x, VectorX* gradient,
         },
         std::plus<double>());
   }
-  // Derivatives per pair in parallel (Hessians only when asked for), then scattered in pair order.
-  std::vector<double> energies(static_cast<size_t>(n));
-  std::vector<PairGradient> gradients(static_cast<size_t>(n));
-  std::vector<PairHessian> hessians(hessian ? static_cast<size_t>(n) : 0);
-  tbb::parallel_for(tbb::blocked_range<Index>(0, n, 16), [&](const tbb::blocked_range<Index>& r) {
-    for (Index k = r.begin(); k < r.end(); ++k)
-      energies[k] = pair_derivatives(x, pairs_[k], gradients[k], hessian ? &hessians[k] : nullptr);
+  if (hessian && offsets_.size() != 49 * pairs_.size())
+    throw std::logic_error("contact: bind() the Hessian after prepare() found new pairs");
+  // Colored chunks of pairs: each pair's derivatives are added as soon as they are computed,
+  // through the block offsets found in prepare() or bind(). Energy and force sum per chunk.
+  const Eigen::Vector2d sums = run_by_color(color_begin_, Eigen::Vector2d(0, 0), [&](Index c) {
+    Eigen::Vector2d acc(0, 0);
+    PairGradient grad;
+    PairHessian hess;
+    for (Index k = chunk_begin_[c]; k < chunk_begin_[c + 1]; ++k) {
+      acc(0) += pair_derivatives(x, pairs_[k], grad, hessian ? &hess : nullptr);
+      acc(1) += grad.tail<9>().reshaped(3, 3).rowwise().sum().norm();
+      for (int a = 0; a < 7; ++a) gradient->segment<3>(3 * nodes_(k, a)) += grad.segment<3>(3 * a);
+      if (hessian) hessian->add_blocks<7>(offsets_.data() + 49 * static_cast<size_t>(k), hess);
+    }
+    return acc;
   });
-  double energy = 0;
-  stats_.force = 0;
-  for (Index k = 0; k < n; ++k) {
-    const std::array<Index, 7> v = pair_nodes(pairs_[k]);
-    energy += energies[k];
-    stats_.force += gradients[k].tail<9>().reshaped(3, 3).rowwise().sum().norm();
-    for (int a = 0; a < 7; ++a) gradient->segment<3>(3 * v[a]) += gradients[k].segment<3>(3 * a);
-    if (!hessian) continue;
-    for (int a = 0; a < 7; ++a)
-      for (int b = 0; b < 7; ++b)
-        hessian->add_block(hessian->block_index(v[a], v[b]), hessians[k].block<3, 3>(3 * a, 3 * b));
-  }
-  return energy;
+  stats_.force = sums(1);
+  return sums(0);
 }
 
 }  // namespace depthfem

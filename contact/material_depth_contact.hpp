@@ -35,8 +35,11 @@ struct ContactStats {
 
 /// The contact force module. Geometry (tree, clipping, depth lookup) lives in aabb_tree, clip
 /// and material_depth; this class pairs elements and integrates the penalty (penalty.hpp).
-/// Pair search and integration run in parallel; results are summed in pair order, so they do
-/// not depend on the number of threads.
+/// Pair search and integration run in parallel. prepare() orders the pairs into chunks colored so
+/// that the chunks of a color share no node, and finds every pair's 49 Hessian blocks in the
+/// bound pattern; evaluate() adds each pair's derivatives as it computes them, chunks of a color
+/// concurrently, without searching or allocating. Every block and gradient entry receives its
+/// terms in pair order, whatever the number of threads.
 class MaterialDepthContact final : public ForceModule {
  public:
   /// `depth` per node [m] (material_depth(mesh)).
@@ -50,6 +53,7 @@ class MaterialDepthContact final : public ForceModule {
   bool pattern_changed() const override { return pattern_changed_; }
   double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
 
+  /// The active pairs of the last prepare(), in processing order.
   const std::vector<ContactPair>& pairs() const { return pairs_; }
   ContactStats stats() const { return stats_; }
 
@@ -70,8 +74,13 @@ class MaterialDepthContact final : public ForceModule {
   ContactOptions options_;
   double min_area2_ = 0;
   AabbTree tree_;
+  using PairNodes = Eigen::Matrix<Index, Eigen::Dynamic, 7>;
   std::vector<ContactPair> pairs_;
-  mutable ContactStats stats_;  // evaluate() records the force it computes anyway
+  PairNodes nodes_;                 // tet corners, triangle corners per pair
+  std::vector<Index> chunk_begin_;  // pair offsets of the chunks
+  std::vector<Index> color_begin_;  // chunk offsets of the colors
+  std::vector<Index> offsets_;      // 49 block indices per pair, empty while the pattern lacks some
+  mutable ContactStats stats_;      // evaluate() records the force it computes anyway
   const BlockSparseMatrix* bound_ = nullptr;
   bool pattern_changed_ = false;
 };

@@ -1,11 +1,21 @@
 #include "contact/node_to_surface_contact.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <functional>
+#include <stdexcept>
+
 #include "contact/material_depth.hpp"
 #include "contact/penalty.hpp"
+#include "core/element_partition.hpp"
 
 namespace depthfem {
 
 namespace {
+
+constexpr Index kChunk = 256;  // pairs per task; fixed for reproducible results
 
 // Penalty of node p against the plane of triangle (q0, q1, q2): eps A / 2 g^2 for g > 0.
 template <class S>
@@ -49,7 +59,7 @@ void NodeToSurfaceContact::begin_step(const Points& x, double) {
 void NodeToSurfaceContact::prepare(const Points& x) {
   tet_tree_.refit(tet_boxes(x, tets_));
   tri_tree_.refit(triangle_boxes(x, tris_));
-  pairs_.clear();
+  std::vector<std::pair<Index, Index>> pairs;
   for (Index i : surface_nodes_) {
     const Vec3 p = x.row(i);
     // Inside another body: in one of its tets (barycentric coordinates all >= 0).
@@ -74,19 +84,40 @@ void NodeToSurfaceContact::prepare(const Points& x) {
       if (d < best) best = d, nearest = f;
       return best;
     });
-    if (nearest >= 0) pairs_.emplace_back(i, nearest);
+    if (nearest >= 0) pairs.emplace_back(i, nearest);
   }
+  // Processing order: colored chunks along a Morton curve (as in MaterialDepthContact).
+  const Index n = static_cast<Index>(pairs.size());
+  PairNodes nodes(n, 4);
+  Points centres(n, 3);
+  for (Index k = 0; k < n; ++k) {
+    const auto [i, f] = pairs[k];
+    nodes.row(k) << i, tris_(f, 0), tris_(f, 1), tris_(f, 2);
+    centres.row(k) = x.row(i);
+  }
+  const ElementPartition part =
+      partition_elements(nodes, static_cast<Index>(x.rows()), centres, kChunk);
+  pairs_.resize(pairs.size());
+  nodes_.resize(n, 4);
+  for (Index k = 0; k < n; ++k) {
+    pairs_[k] = pairs[part.order[k]];
+    nodes_.row(k) = nodes.row(part.order[k]);
+  }
+  chunk_begin_ = part.chunk_begin;
+  color_begin_ = part.color_begin;
+  // Block offsets in the bound pattern; missing couplings need a new pattern (bind() then).
   pattern_changed_ = false;
+  offsets_.clear();
   if (bound_) {
-    for (const auto& [i, f] : pairs_)
-      for (int k = 0; k < 3; ++k)
-        if (bound_->block_index(i, tris_(f, k)) < 0) pattern_changed_ = true;
+    offsets_ = bound_->clique_block_indices(nodes_);
+    pattern_changed_ = std::find(offsets_.begin(), offsets_.end(), -1) != offsets_.end();
+    if (pattern_changed_) offsets_.clear();
   }
 }
 
 void NodeToSurfaceContact::add_couplings(SparsityBuilder& builder) const {
-  for (const auto& [i, f] : pairs_) {
-    const Index v[4] = {i, tris_(f, 0), tris_(f, 1), tris_(f, 2)};
+  for (Index k = 0; k < nodes_.rows(); ++k) {
+    const Index v[4] = {nodes_(k, 0), nodes_(k, 1), nodes_(k, 2), nodes_(k, 3)};
     builder.add_clique(v);
   }
 }
@@ -94,32 +125,46 @@ void NodeToSurfaceContact::add_couplings(SparsityBuilder& builder) const {
 void NodeToSurfaceContact::bind(const BlockSparseMatrix& hessian) {
   bound_ = &hessian;
   pattern_changed_ = false;
+  offsets_ = hessian.clique_block_indices(nodes_);
+  if (std::find(offsets_.begin(), offsets_.end(), -1) != offsets_.end())
+    throw std::logic_error("node-to-surface contact: the Hessian pattern lacks a pair's coupling");
+}
+
+double NodeToSurfaceContact::pair_energy(const Points& x, Index k) const {
+  return node_energy(
+      make_point<double>(x.row(nodes_(k, 0)), 0), make_point<double>(x.row(nodes_(k, 1)), 0),
+      make_point<double>(x.row(nodes_(k, 2)), 0), make_point<double>(x.row(nodes_(k, 3)), 0),
+      penalty_ * node_area_(nodes_(k, 0)));
 }
 
 double NodeToSurfaceContact::evaluate(const Points& x, VectorX* gradient,
                                       BlockSparseMatrix* hessian) const {
-  using D = Dual2<12>;
-  double energy = 0;
-  for (const auto& [i, f] : pairs_) {
-    const Index v[4] = {i, tris_(f, 0), tris_(f, 1), tris_(f, 2)};
-    const double eps_area = penalty_ * node_area_(i);
-    if (!gradient) {
-      energy += node_energy(make_point<double>(x.row(v[0]), 0), make_point<double>(x.row(v[1]), 0),
-                            make_point<double>(x.row(v[2]), 0), make_point<double>(x.row(v[3]), 0),
-                            eps_area);
-      continue;
-    }
-    const D W = node_energy(make_point<D>(x.row(v[0]), 0), make_point<D>(x.row(v[1]), 3),
-                            make_point<D>(x.row(v[2]), 6), make_point<D>(x.row(v[3]), 9), eps_area);
-    energy += W.v;
-    for (int a = 0; a < 4; ++a) {
-      gradient->segment<3>(3 * v[a]) += W.g.segment<3>(3 * a);
-      if (!hessian) continue;
-      for (int b = 0; b < 4; ++b)
-        hessian->add_block(hessian->block_index(v[a], v[b]), W.h.block<3, 3>(3 * a, 3 * b));
-    }
+  const Index n = static_cast<Index>(pairs_.size());
+  if (!gradient) {
+    return tbb::parallel_deterministic_reduce(
+        tbb::blocked_range<Index>(0, n, kChunk), 0.0,
+        [&](const tbb::blocked_range<Index>& r, double acc) {
+          for (Index k = r.begin(); k < r.end(); ++k) acc += pair_energy(x, k);
+          return acc;
+        },
+        std::plus<double>());
   }
-  return energy;
+  if (hessian && offsets_.size() != 16 * pairs_.size())
+    throw std::logic_error("node-to-surface contact: bind() the Hessian after prepare()");
+  using D = Dual2<12>;
+  return run_by_color(color_begin_, 0.0, [&](Index c) {
+    double energy = 0;
+    for (Index k = chunk_begin_[c]; k < chunk_begin_[c + 1]; ++k) {
+      const D W =
+          node_energy(make_point<D>(x.row(nodes_(k, 0)), 0), make_point<D>(x.row(nodes_(k, 1)), 3),
+                      make_point<D>(x.row(nodes_(k, 2)), 6), make_point<D>(x.row(nodes_(k, 3)), 9),
+                      penalty_ * node_area_(nodes_(k, 0)));
+      energy += W.v;
+      for (int a = 0; a < 4; ++a) gradient->segment<3>(3 * nodes_(k, a)) += W.g.segment<3>(3 * a);
+      if (hessian) hessian->add_blocks<4>(offsets_.data() + 16 * static_cast<size_t>(k), W.h);
+    }
+    return energy;
+  });
 }
 
 }  // namespace depthfem

@@ -25,10 +25,13 @@ class NodeToSurfaceContact final : public ForceModule {
   bool pattern_changed() const override { return pattern_changed_; }
   double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
 
-  /// Active (node, triangle) pairs of the last prepare().
+  /// Active (node, triangle) pairs of the last prepare(), in processing order (colored chunks,
+  /// as in MaterialDepthContact).
   const std::vector<std::pair<Index, Index>>& pairs() const { return pairs_; }
 
  private:
+  double pair_energy(const Points& x, Index k) const;
+
   TetIndices tets_;
   TriIndices tris_;
   IndexVector tet_body_, tri_body_;
@@ -37,7 +40,11 @@ class NodeToSurfaceContact final : public ForceModule {
   VectorX node_area_;  // boundary area share per node [m^2]
   double penalty_;
   AabbTree tet_tree_, tri_tree_;
+  using PairNodes = Eigen::Matrix<Index, Eigen::Dynamic, 4>;
   std::vector<std::pair<Index, Index>> pairs_;
+  PairNodes nodes_;                               // node, triangle corners per pair
+  std::vector<Index> chunk_begin_, color_begin_;  // chunks of pairs_, colors of chunks
+  std::vector<Index> offsets_;  // 16 block indices per pair, empty while the pattern lacks some
   const BlockSparseMatrix* bound_ = nullptr;
   bool pattern_changed_ = false;
 };

@@ -7,6 +7,7 @@
 #include <variant>
 #include <vector>
 
+#include "contact/penalty_derivatives.hpp"
 #include "core/force_module.hpp"
 #include "core/mesh.hpp"
 
@@ -31,7 +32,10 @@ struct Obstacle {
   double penalty = 1e6;  ///< eps [Pa/m]
 };
 
-/// Contact of the boundary triangles of the listed bodies with analytic obstacles.
+/// Contact of the boundary triangles of the listed bodies with analytic obstacles. Derivatives
+/// come from the staged chain rule (field_polygon_penalty_derivatives); the triangles touching an
+/// obstacle are walked in colored chunks, as the material-depth pairs are, and add their
+/// derivatives through block offsets found once per pattern.
 class ObstacleContact final : public ForceModule {
  public:
   /// `bodies`: the bodies that touch the obstacles (their boundary triangles).
@@ -42,6 +46,7 @@ class ObstacleContact final : public ForceModule {
   void begin_step(const Points& x, double load) override;
   void prepare(const Points& x) override;
   void add_couplings(SparsityBuilder& builder) const override;
+  void bind(const BlockSparseMatrix& hessian) override;
   bool pattern_changed() const override { return false; }
   double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
 
@@ -50,13 +55,17 @@ class ObstacleContact final : public ForceModule {
   double contact_area(const Points& x) const;
 
  private:
-  template <class S, class Corner>
-  S triangle_energy(const Obstacle& o, const Corner& Q) const;
+  // Energy of triangle f in obstacle o, with its gradient and Hessian where asked for.
+  double triangle_derivatives(const Points& x, Index o, Index f, TriangleGradient* gradient,
+                              TriangleHessian* hessian) const;
 
   TriIndices tris_;
   std::vector<Obstacle> obstacles_;
   double load_ = 0;
-  std::vector<std::pair<Index, Index>> active_;  // (obstacle, triangle) with some corner inside
+  std::vector<std::pair<Index, Index>> active_;   // (obstacle, triangle) with some corner inside,
+                                                  // in processing order
+  std::vector<Index> chunk_begin_, color_begin_;  // chunks of active_, colors of chunks
+  std::vector<Index> offsets_;                    // 9 block indices per triangle
 };
 
 }  // namespace depthfem

@@ -59,7 +59,7 @@ void tet_batch(const M& m, const TetBatchInput<V>& in, TetBatch<V>& out) {
   out.energy = in.volume * s.psi;
   if constexpr (kOrder == 0) return;
 
-  // G = V P D^T on nodes 1..3; node 0 balances them.
+    // G = V P D^T on nodes 1..3; node 0 balances them.
 #pragma GCC unroll 3
   for (int i = 0; i < 3; ++i) {
     V sum(0.0);
@@ -81,8 +81,8 @@ void tet_batch(const M& m, const TetBatchInput<V>& in, TetBatch<V>& out) {
     for (int c = 0; c < 3; ++c)
 #pragma GCC unroll 3
       for (int e = 0; e < 3; ++e)
-        U[p][3 * c + e] = s.dPdF(p, e) * D(c, 0) + s.dPdF(p, e + 3) * D(c, 1) +
-                          s.dPdF(p, e + 6) * D(c, 2);
+        U[p][3 * c + e] =
+            s.dPdF(p, e) * D(c, 0) + s.dPdF(p, e + 3) * D(c, 1) + s.dPdF(p, e + 6) * D(c, 2);
   // K = V A U on and above the diagonal, written into the node 1..3 part of the 12x12 with its
   // mirror image: K(3b + d, t) = sum_j (V D(b, j)) U(d + 3j, t).
   LaneMatrix3<V> VD;

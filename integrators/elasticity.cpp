@@ -1,11 +1,9 @@
 #include "integrators/elasticity.hpp"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
-
-#include <functional>
+#include <algorithm>
 #include <stdexcept>
 
+#include "core/element_partition.hpp"
 #include "core/error.hpp"
 #include "integrators/tet_inputs.hpp"
 
@@ -85,33 +83,18 @@ double run_rows(const M& m, const TetBlock& b, const Index* scatter, const Point
     if constexpr (kOrder >= 1) {
       for (int a = 0; a < 4; ++a) g->segment<3>(3 * b.nodes(e, a)) += local.gradient.col(a);
     }
-    if constexpr (kOrder >= 2) {
-      const Index* off = scatter + 16 * e;
-      for (int a = 0; a < 4; ++a)
-        for (int c = 0; c < 4; ++c)
-          H->add_block(off[4 * a + c], local.hessian.block<3, 3>(3 * a, 3 * c));
-    }
+    if constexpr (kOrder >= 2) H->add_blocks<4>(scatter + 16 * e, local.hessian);
   }
   return energy;
 }
 
-// Colors in order; the chunks of one color share no node and run concurrently, each walked in
-// order. Chunk energies are summed in a fixed tree (deterministic reduce, one chunk per leaf).
+// The chunks of a block color by color (run_by_color: deterministic for any number of threads).
 template <int kOrder, class M>
 double run_group(const M& m, const TetBlock& b, const Index* scatter, const Points& x, VectorX* g,
                  BlockSparseMatrix* H) {
-  double total = 0;
-  for (Index c = 0; c < b.num_colors(); ++c) {
-    total += tbb::parallel_deterministic_reduce(
-        tbb::blocked_range<Index>(b.color_begin[c], b.color_begin[c + 1], 1), 0.0,
-        [&](const tbb::blocked_range<Index>& chunks, double acc) {
-          for (Index k = chunks.begin(); k < chunks.end(); ++k)
-            acc += run_rows<kOrder>(m, b, scatter, x, b.chunk_begin[k], b.chunk_begin[k + 1], g, H);
-          return acc;
-        },
-        std::plus<double>());
-  }
-  return total;
+  return run_by_color(b.color_begin, 0.0, [&](Index k) {
+    return run_rows<kOrder>(m, b, scatter, x, b.chunk_begin[k], b.chunk_begin[k + 1], g, H);
+  });
 }
 
 }  // namespace
@@ -150,15 +133,9 @@ void Elasticity::add_couplings(SparsityBuilder& builder) const {
 
 void Elasticity::bind(const BlockSparseMatrix& H) {
   for (Group& grp : groups_) {
-    const TetBlock& b = grp.block;
-    grp.scatter.resize(16 * static_cast<size_t>(b.size()));
-    for (Index e = 0; e < b.size(); ++e)
-      for (int a = 0; a < 4; ++a)
-        for (int c = 0; c < 4; ++c) {
-          const Index off = H.block_index(b.nodes(e, a), b.nodes(e, c));
-          if (off < 0) throw std::logic_error("elasticity: Hessian pattern lacks a tet coupling");
-          grp.scatter[16 * e + 4 * a + c] = off;
-        }
+    grp.scatter = H.clique_block_indices(grp.block.nodes);
+    if (std::find(grp.scatter.begin(), grp.scatter.end(), -1) != grp.scatter.end())
+      throw std::logic_error("elasticity: Hessian pattern lacks a tet coupling");
   }
 }
 

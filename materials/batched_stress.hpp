@@ -128,8 +128,8 @@ BatchedStress<V> evaluate_batched_stress(const M& m, const LaneMatrix3<V>& F,
     g[kI1][p] = 2.0 * F[p];
     g[kJ][p] = cof[p];
     if constexpr (M::kUsesI2)
-      g[kI2][p] = 2.0 * (inv.I1 * F[p] - (at(i, 0) * C(0, j) + at(i, 1) * C(1, j) +
-                                          at(i, 2) * C(2, j)));
+      g[kI2][p] =
+          2.0 * (inv.I1 * F[p] - (at(i, 0) * C(0, j) + at(i, 1) * C(1, j) + at(i, 2) * C(2, j)));
     if constexpr (M::kUsesFiber) g[kI4][p] = 2.0 * Ff[i] * f[j];
   }
 #pragma GCC unroll 9

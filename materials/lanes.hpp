@@ -144,7 +144,6 @@ template <int W, class F>
 Lanes<W> per_packet(const Lanes<W>& x, F f) {
   using Packet = typename Eigen::internal::find_best_packet<double, W>::type;
   constexpr int kSize = Eigen::internal::unpacket_traits<Packet>::size;
-  Lanes<W> r;
   double in[W], out[W];
   x.store(in);
   for (int k = 0; k < W; k += kSize)
