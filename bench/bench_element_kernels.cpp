@@ -2,9 +2,10 @@
 // structures (AoS), structure of arrays (SoA, the TetBlock the library uses) and blocks of W tets
 // (AoSoA), each run by the scalar kernel (tet_local, one tet at a time) and the batched kernel
 // (tet_batch, W tets in the lanes of a vector register), for energy, + gradient, + Hessian, on 1
-// and 2 threads; then the production path, Elasticity::evaluate, which also scatters the Hessian
-// into the block-CSR matrix; and the two ceilings of a roofline: fused multiply-add throughput
-// and memory bandwidth.
+// and 2 threads (SoA also with lanes written with std::experimental::simd, and with 4 lanes where
+// registers hold 8); then the production path, Elasticity::evaluate, which also scatters the
+// Hessian into the block-CSR matrix; and the two ceilings of a roofline: fused multiply-add
+// throughput and memory bandwidth.
 //
 //   build/bench/bench_element_kernels --benchmark_counters_tabular=true \
 //       --benchmark_out=bench/results/element_kernels.json --benchmark_out_format=json
@@ -495,6 +496,7 @@ const bool registered = [] {
   register_orders<AoSoA, double>("AoSoA", "scalar");
   register_orders<AoSoA, Lanes<kLanes>>("AoSoA", "batched");
   register_orders<SoA, StdLanes>("SoA", "batched_stdsimd");
+  if constexpr (kLanes == 8) register_orders<SoA, Lanes<4>>("SoA", "batched_w4");
   benchmark::RegisterBenchmark("Assembly/Gradient", BM_Assembly<false>)
       ->Arg(1)
       ->Arg(2)

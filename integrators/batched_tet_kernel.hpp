@@ -73,28 +73,25 @@ void tet_batch(const M& m, const TetBatchInput<V>& in, TetBatch<V>& out) {
   }
   if constexpr (kOrder == 1) return;
 
-  // U = dP/dF A^T: U(p, 3c + e) = sum_l dP/dF(p, e + 3l) D(c, l).
-  std::array<std::array<V, 9>, 9> U;
-#pragma GCC unroll 9
-  for (int p = 0; p < 9; ++p)
-#pragma GCC unroll 3
-    for (int c = 0; c < 3; ++c)
-#pragma GCC unroll 3
-      for (int e = 0; e < 3; ++e)
-        U[p][3 * c + e] =
-            s.dPdF(p, e) * D(c, 0) + s.dPdF(p, e + 3) * D(c, 1) + s.dPdF(p, e + 6) * D(c, 2);
-  // K = V A U on and above the diagonal, written into the node 1..3 part of the 12x12 with its
-  // mirror image: K(3b + d, t) = sum_j (V D(b, j)) U(d + 3j, t).
+  // K = V A dP/dF A^T a column at a time: column t = 3c + e of U = dP/dF A^T is
+  //   U(p, t) = sum_l dP/dF(p, e + 3l) D(c, l),
+  // and K(3b + d, t) = sum_j (V D(b, j)) U(d + 3j, t) on and above the diagonal, written into the
+  // node 1..3 part of the 12x12 with its mirror image.
   LaneMatrix3<V> VD;
 #pragma GCC unroll 9
   for (int k = 0; k < 9; ++k) VD[k] = in.volume * in.D[k];
   auto& H = out.hessian;
 #pragma GCC unroll 9
-  for (int r = 0; r < 9; ++r) {
-    const int b = r / 3, d = r % 3;
+  for (int t = 0; t < 9; ++t) {
+    const int c = t / 3, e = t % 3;
+    std::array<V, 9> u;
 #pragma GCC unroll 9
-    for (int t = r; t < 9; ++t) {
-      const V k = VD[b] * U[d][t] + VD[3 + b] * U[d + 3][t] + VD[6 + b] * U[d + 6][t];
+    for (int p = 0; p < 9; ++p)
+      u[p] = s.dPdF(p, e) * D(c, 0) + s.dPdF(p, e + 3) * D(c, 1) + s.dPdF(p, e + 6) * D(c, 2);
+#pragma GCC unroll 9
+    for (int r = 0; r <= t; ++r) {
+      const int b = r / 3, d = r % 3;
+      const V k = VD[b] * u[d] + VD[3 + b] * u[d + 3] + VD[6 + b] * u[d + 6];
       H[3 + r][3 + t] = k;
       H[3 + t][3 + r] = k;
     }
