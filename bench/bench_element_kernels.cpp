@@ -55,9 +55,14 @@ struct Scene {
   }
   double nodes_per_tet() const { return double(x.rows()) / double(block.size()); }
 };
+// The one instance of T, built on first use.
+template <class T>
+const T& instance() {
+  static const T t;
+  return t;
+}
 const Scene& scene() {
-  static const Scene s;
-  return s;
+  return instance<Scene>();
 }
 
 // ---- Layouts. Each gives the scalar kernel one row (input, node) and the batched kernel W rows
@@ -102,13 +107,9 @@ struct AoSData {
     for (Index v = 0; v < s.x.rows(); ++v) x.push_back({s.x(v, 0), s.x(v, 1), s.x(v, 2)});
   }
 };
-const AoSData& aos() {
-  static const AoSData d;
-  return d;
-}
 struct AoS {
   static constexpr bool kPadded = false;
-  const AoSData& d = aos();
+  const AoSData& d = instance<AoSData>();
   Index node(Index, Index e, int a) const { return d.tets[e].nodes[a]; }
   TetInput input(Index, Index e) const {
     const TetRecord& r = d.tets[e];
@@ -158,13 +159,9 @@ struct AoSoAData {
     }
   }
 };
-const AoSoAData& aosoa() {
-  static const AoSoAData d;
-  return d;
-}
 struct AoSoA {
   static constexpr bool kPadded = true;
-  const AoSoAData& d = aosoa();
+  const AoSoAData& d = instance<AoSoAData>();
   const TetBlock& b = scene().block;
   const Points& x = scene().x;
   // Block and lane of row e of chunk k.

@@ -2,20 +2,16 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
-#include <algorithm>
-#include <functional>
 #include <stdexcept>
 
 #include "contact/penalty.hpp"
-#include "core/element_partition.hpp"
 #include "core/lumped_mass.hpp"
 
 namespace depthfem {
 
 namespace {
-constexpr Index kChunk = 256;  // triangles (or pairs) per task; fixed for reproducible results
+constexpr Index kChunk = 256;  // triangles per task of the pair search
 
 std::array<Vec3, 4> tet_corners(const Points& x, const TetIndices& tets, Index t) {
   return {x.row(tets(t, 0)), x.row(tets(t, 1)), x.row(tets(t, 2)), x.row(tets(t, 3))};
@@ -79,9 +75,8 @@ void MaterialDepthContact::prepare(const Points& x) {
   }
   const Index n_pairs = static_cast<Index>(all.size());
   stats_.active = n_pairs;
-  // Processing order: pairs along a Morton curve through their polygons' centres, in chunks
-  // colored so that the chunks of a color share no node (evaluate scatters them concurrently).
-  PairNodes nodes(n_pairs, 7);
+  // Processing order: along a Morton curve through the polygons' centres, in colored chunks.
+  PairSchedule::Nodes nodes(n_pairs, 7);
   Points centres(n_pairs, 3);
   for (Index k = 0; k < n_pairs; ++k) {
     const ContactPair& p = all[k];
@@ -93,25 +88,12 @@ void MaterialDepthContact::prepare(const Points& x) {
       stats_.area +=
           0.5 * (p.polygon.x[v] - p.polygon.x[0]).cross(p.polygon.x[v + 1] - p.polygon.x[0]).norm();
   }
-  const ElementPartition part =
-      partition_elements(nodes, static_cast<Index>(depth_.size()), centres, kChunk);
+  const std::vector<Index> order =
+      schedule_.arrange(nodes, centres, static_cast<Index>(depth_.size()), bound_);
   pairs_.resize(all.size());
-  nodes_.resize(n_pairs, 7);
-  for (Index k = 0; k < n_pairs; ++k) {
-    pairs_[k] = all[part.order[k]];
-    nodes_.row(k) = nodes.row(part.order[k]);
-  }
-  chunk_begin_ = part.chunk_begin;
-  color_begin_ = part.color_begin;
-  // Block offsets in the bound pattern; a pair whose nodes are not coupled there needs a new
-  // pattern (bind() then finds the offsets).
-  pattern_changed_ = false;
-  offsets_.clear();
-  if (bound_) {
-    offsets_ = bound_->clique_block_indices(nodes_);
-    pattern_changed_ = std::find(offsets_.begin(), offsets_.end(), -1) != offsets_.end();
-    if (pattern_changed_) offsets_.clear();
-  }
+  for (Index k = 0; k < n_pairs; ++k) pairs_[k] = all[order[k]];
+  // A pair whose nodes are not coupled in the bound pattern needs a new one (bind() follows).
+  pattern_changed_ = bound_ && !schedule_.has_blocks();
 }
 
 void MaterialDepthContact::add_couplings(SparsityBuilder& builder) const {
@@ -124,9 +106,7 @@ void MaterialDepthContact::add_couplings(SparsityBuilder& builder) const {
 void MaterialDepthContact::bind(const BlockSparseMatrix& hessian) {
   bound_ = &hessian;
   pattern_changed_ = false;
-  offsets_ = hessian.clique_block_indices(nodes_);
-  if (std::find(offsets_.begin(), offsets_.end(), -1) != offsets_.end())
-    throw std::logic_error("contact: the Hessian pattern lacks a pair's coupling");
+  schedule_.bind(hessian, name());
 }
 
 std::array<double, 4> MaterialDepthContact::pair_depths(const ContactPair& p) const {
@@ -151,31 +131,18 @@ double MaterialDepthContact::pair_derivatives(const Points& x, const ContactPair
 
 double MaterialDepthContact::evaluate(const Points& x, VectorX* gradient,
                                       BlockSparseMatrix* hessian) const {
-  const Index n = static_cast<Index>(pairs_.size());
-  if (!gradient) {
-    return tbb::parallel_deterministic_reduce(
-        tbb::blocked_range<Index>(0, n, kChunk), 0.0,
-        [&](const tbb::blocked_range<Index>& r, double acc) {
-          for (Index k = r.begin(); k < r.end(); ++k) acc += pair_energy(x, pairs_[k]);
-          return acc;
-        },
-        std::plus<double>());
-  }
-  if (hessian && offsets_.size() != 49 * pairs_.size())
+  if (!gradient) return schedule_.run(0.0, [&](Index k) { return pair_energy(x, pairs_[k]); });
+  if (hessian && !schedule_.has_blocks())
     throw std::logic_error("contact: bind() the Hessian after prepare() found new pairs");
-  // Colored chunks of pairs: each pair's derivatives are added as soon as they are computed,
-  // through the block offsets found in prepare() or bind(). Energy and force sum per chunk.
-  const Eigen::Vector2d sums = run_by_color(color_begin_, Eigen::Vector2d(0, 0), [&](Index c) {
-    Eigen::Vector2d acc(0, 0);
+  // Each pair's derivatives are added as soon as they are computed; energy and force sum.
+  const Eigen::Vector2d sums = schedule_.run(Eigen::Vector2d(0, 0), [&](Index k) {
     PairGradient grad;
     PairHessian hess;
-    for (Index k = chunk_begin_[c]; k < chunk_begin_[c + 1]; ++k) {
-      acc(0) += pair_derivatives(x, pairs_[k], grad, hessian ? &hess : nullptr);
-      acc(1) += grad.tail<9>().reshaped(3, 3).rowwise().sum().norm();
-      for (int a = 0; a < 7; ++a) gradient->segment<3>(3 * nodes_(k, a)) += grad.segment<3>(3 * a);
-      if (hessian) hessian->add_blocks<7>(offsets_.data() + 49 * static_cast<size_t>(k), hess);
-    }
-    return acc;
+    const double energy = pair_derivatives(x, pairs_[k], grad, hessian ? &hess : nullptr);
+    for (int a = 0; a < 7; ++a)
+      gradient->segment<3>(3 * schedule_.node(k, a)) += grad.segment<3>(3 * a);
+    if (hessian) hessian->add_blocks<7>(schedule_.blocks(k), hess);
+    return Eigen::Vector2d(energy, grad.tail<9>().reshaped(3, 3).rowwise().sum().norm());
   });
   stats_.force = sums(1);
   return sums(0);

@@ -7,6 +7,7 @@
 
 #include "contact/aabb_tree.hpp"
 #include "contact/clip.hpp"
+#include "contact/pair_schedule.hpp"
 #include "contact/penalty_derivatives.hpp"
 #include "core/force_module.hpp"
 #include "core/mesh.hpp"
@@ -35,11 +36,11 @@ struct ContactStats {
 
 /// The contact force module. Geometry (tree, clipping, depth lookup) lives in aabb_tree, clip
 /// and material_depth; this class pairs elements and integrates the penalty (penalty.hpp).
-/// Pair search and integration run in parallel. prepare() orders the pairs into chunks colored so
-/// that the chunks of a color share no node, and finds every pair's 49 Hessian blocks in the
-/// bound pattern; evaluate() adds each pair's derivatives as it computes them, chunks of a color
-/// concurrently, without searching or allocating. Every block and gradient entry receives its
-/// terms in pair order, whatever the number of threads.
+/// Pair search and integration run in parallel. prepare() orders the pairs (PairSchedule) and
+/// finds their 49 Hessian blocks each in the bound pattern; evaluate() adds each pair's
+/// derivatives as it computes them, chunks of a color concurrently, without searching or
+/// allocating. Every block and gradient entry receives its terms in pair order, whatever the
+/// number of threads.
 class MaterialDepthContact final : public ForceModule {
  public:
   /// `depth` per node [m] (material_depth(mesh)).
@@ -74,13 +75,9 @@ class MaterialDepthContact final : public ForceModule {
   ContactOptions options_;
   double min_area2_ = 0;
   AabbTree tree_;
-  using PairNodes = Eigen::Matrix<Index, Eigen::Dynamic, 7>;
   std::vector<ContactPair> pairs_;
-  PairNodes nodes_;                 // tet corners, triangle corners per pair
-  std::vector<Index> chunk_begin_;  // pair offsets of the chunks
-  std::vector<Index> color_begin_;  // chunk offsets of the colors
-  std::vector<Index> offsets_;      // 49 block indices per pair, empty while the pattern lacks some
-  mutable ContactStats stats_;      // evaluate() records the force it computes anyway
+  PairSchedule schedule_;       // of pairs_: tet corners, triangle corners
+  mutable ContactStats stats_;  // evaluate() records the force it computes anyway
   const BlockSparseMatrix* bound_ = nullptr;
   bool pattern_changed_ = false;
 };

@@ -1,21 +1,13 @@
 #include "contact/node_to_surface_contact.hpp"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
-
-#include <algorithm>
-#include <functional>
 #include <stdexcept>
 
 #include "contact/material_depth.hpp"
 #include "contact/penalty.hpp"
-#include "core/element_partition.hpp"
 
 namespace depthfem {
 
 namespace {
-
-constexpr Index kChunk = 256;  // pairs per task; fixed for reproducible results
 
 // Penalty of node p against the plane of triangle (q0, q1, q2): eps A / 2 g^2 for g > 0.
 template <class S>
@@ -86,38 +78,27 @@ void NodeToSurfaceContact::prepare(const Points& x) {
     });
     if (nearest >= 0) pairs.emplace_back(i, nearest);
   }
-  // Processing order: colored chunks along a Morton curve (as in MaterialDepthContact).
+  // Processing order: colored chunks along a Morton curve (PairSchedule).
   const Index n = static_cast<Index>(pairs.size());
-  PairNodes nodes(n, 4);
+  PairSchedule::Nodes nodes(n, 4);
   Points centres(n, 3);
   for (Index k = 0; k < n; ++k) {
     const auto [i, f] = pairs[k];
     nodes.row(k) << i, tris_(f, 0), tris_(f, 1), tris_(f, 2);
     centres.row(k) = x.row(i);
   }
-  const ElementPartition part =
-      partition_elements(nodes, static_cast<Index>(x.rows()), centres, kChunk);
+  const std::vector<Index> order =
+      schedule_.arrange(nodes, centres, static_cast<Index>(x.rows()), bound_);
   pairs_.resize(pairs.size());
-  nodes_.resize(n, 4);
-  for (Index k = 0; k < n; ++k) {
-    pairs_[k] = pairs[part.order[k]];
-    nodes_.row(k) = nodes.row(part.order[k]);
-  }
-  chunk_begin_ = part.chunk_begin;
-  color_begin_ = part.color_begin;
-  // Block offsets in the bound pattern; missing couplings need a new pattern (bind() then).
-  pattern_changed_ = false;
-  offsets_.clear();
-  if (bound_) {
-    offsets_ = bound_->clique_block_indices(nodes_);
-    pattern_changed_ = std::find(offsets_.begin(), offsets_.end(), -1) != offsets_.end();
-    if (pattern_changed_) offsets_.clear();
-  }
+  for (Index k = 0; k < n; ++k) pairs_[k] = pairs[order[k]];
+  // Missing couplings in the bound pattern need a new one (bind() follows).
+  pattern_changed_ = bound_ && !schedule_.has_blocks();
 }
 
 void NodeToSurfaceContact::add_couplings(SparsityBuilder& builder) const {
-  for (Index k = 0; k < nodes_.rows(); ++k) {
-    const Index v[4] = {nodes_(k, 0), nodes_(k, 1), nodes_(k, 2), nodes_(k, 3)};
+  for (Index k = 0; k < schedule_.size(); ++k) {
+    const Index v[4] = {schedule_.node(k, 0), schedule_.node(k, 1), schedule_.node(k, 2),
+                        schedule_.node(k, 3)};
     builder.add_clique(v);
   }
 }
@@ -125,45 +106,33 @@ void NodeToSurfaceContact::add_couplings(SparsityBuilder& builder) const {
 void NodeToSurfaceContact::bind(const BlockSparseMatrix& hessian) {
   bound_ = &hessian;
   pattern_changed_ = false;
-  offsets_ = hessian.clique_block_indices(nodes_);
-  if (std::find(offsets_.begin(), offsets_.end(), -1) != offsets_.end())
-    throw std::logic_error("node-to-surface contact: the Hessian pattern lacks a pair's coupling");
+  schedule_.bind(hessian, name());
 }
 
 double NodeToSurfaceContact::pair_energy(const Points& x, Index k) const {
-  return node_energy(
-      make_point<double>(x.row(nodes_(k, 0)), 0), make_point<double>(x.row(nodes_(k, 1)), 0),
-      make_point<double>(x.row(nodes_(k, 2)), 0), make_point<double>(x.row(nodes_(k, 3)), 0),
-      penalty_ * node_area_(nodes_(k, 0)));
+  return node_energy(make_point<double>(x.row(schedule_.node(k, 0)), 0),
+                     make_point<double>(x.row(schedule_.node(k, 1)), 0),
+                     make_point<double>(x.row(schedule_.node(k, 2)), 0),
+                     make_point<double>(x.row(schedule_.node(k, 3)), 0),
+                     penalty_ * node_area_(schedule_.node(k, 0)));
 }
 
 double NodeToSurfaceContact::evaluate(const Points& x, VectorX* gradient,
                                       BlockSparseMatrix* hessian) const {
-  const Index n = static_cast<Index>(pairs_.size());
-  if (!gradient) {
-    return tbb::parallel_deterministic_reduce(
-        tbb::blocked_range<Index>(0, n, kChunk), 0.0,
-        [&](const tbb::blocked_range<Index>& r, double acc) {
-          for (Index k = r.begin(); k < r.end(); ++k) acc += pair_energy(x, k);
-          return acc;
-        },
-        std::plus<double>());
-  }
-  if (hessian && offsets_.size() != 16 * pairs_.size())
+  if (!gradient) return schedule_.run(0.0, [&](Index k) { return pair_energy(x, k); });
+  if (hessian && !schedule_.has_blocks())
     throw std::logic_error("node-to-surface contact: bind() the Hessian after prepare()");
-  using D = Dual2<12>;
-  return run_by_color(color_begin_, 0.0, [&](Index c) {
-    double energy = 0;
-    for (Index k = chunk_begin_[c]; k < chunk_begin_[c + 1]; ++k) {
-      const D W =
-          node_energy(make_point<D>(x.row(nodes_(k, 0)), 0), make_point<D>(x.row(nodes_(k, 1)), 3),
-                      make_point<D>(x.row(nodes_(k, 2)), 6), make_point<D>(x.row(nodes_(k, 3)), 9),
-                      penalty_ * node_area_(nodes_(k, 0)));
-      energy += W.v;
-      for (int a = 0; a < 4; ++a) gradient->segment<3>(3 * nodes_(k, a)) += W.g.segment<3>(3 * a);
-      if (hessian) hessian->add_blocks<4>(offsets_.data() + 16 * static_cast<size_t>(k), W.h);
-    }
-    return energy;
+  return schedule_.run(0.0, [&](Index k) {
+    using D = Dual2<12>;
+    const D W = node_energy(make_point<D>(x.row(schedule_.node(k, 0)), 0),
+                            make_point<D>(x.row(schedule_.node(k, 1)), 3),
+                            make_point<D>(x.row(schedule_.node(k, 2)), 6),
+                            make_point<D>(x.row(schedule_.node(k, 3)), 9),
+                            penalty_ * node_area_(schedule_.node(k, 0)));
+    for (int a = 0; a < 4; ++a)
+      gradient->segment<3>(3 * schedule_.node(k, a)) += W.g.segment<3>(3 * a);
+    if (hessian) hessian->add_blocks<4>(schedule_.blocks(k), W.h);
+    return W.v;
   });
 }
 

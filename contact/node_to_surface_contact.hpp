@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "contact/aabb_tree.hpp"
+#include "contact/pair_schedule.hpp"
 #include "core/force_module.hpp"
 #include "core/mesh.hpp"
 
@@ -25,8 +26,7 @@ class NodeToSurfaceContact final : public ForceModule {
   bool pattern_changed() const override { return pattern_changed_; }
   double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
 
-  /// Active (node, triangle) pairs of the last prepare(), in processing order (colored chunks,
-  /// as in MaterialDepthContact).
+  /// Active (node, triangle) pairs of the last prepare(), in processing order (PairSchedule).
   const std::vector<std::pair<Index, Index>>& pairs() const { return pairs_; }
 
  private:
@@ -40,11 +40,8 @@ class NodeToSurfaceContact final : public ForceModule {
   VectorX node_area_;  // boundary area share per node [m^2]
   double penalty_;
   AabbTree tet_tree_, tri_tree_;
-  using PairNodes = Eigen::Matrix<Index, Eigen::Dynamic, 4>;
   std::vector<std::pair<Index, Index>> pairs_;
-  PairNodes nodes_;                               // node, triangle corners per pair
-  std::vector<Index> chunk_begin_, color_begin_;  // chunks of pairs_, colors of chunks
-  std::vector<Index> offsets_;  // 16 block indices per pair, empty while the pattern lacks some
+  PairSchedule schedule_;  // of pairs_: node, triangle corners
   const BlockSparseMatrix* bound_ = nullptr;
   bool pattern_changed_ = false;
 };

@@ -1,21 +1,13 @@
 #include "contact/obstacle_contact.hpp"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
-
-#include <algorithm>
-#include <functional>
 #include <stdexcept>
 
 #include "contact/penalty.hpp"
-#include "core/element_partition.hpp"
 #include "core/error.hpp"
 
 namespace depthfem {
 
 namespace {
-
-constexpr Index kChunk = 256;  // triangles per task; fixed for reproducible results
 
 template <class... F>
 struct Overloaded : F... {
@@ -85,26 +77,24 @@ void ObstacleContact::prepare(const Points& x) {
           active.emplace_back(o, f);
           break;
         }
-  // Processing order: colored chunks along a Morton curve (as in MaterialDepthContact).
+  // Processing order: colored chunks along a Morton curve; all triangles are coupled in the
+  // pattern, so a bound pattern has every block.
   const Index n = static_cast<Index>(active.size());
-  TriIndices nodes(n, 3);
+  PairSchedule::Nodes nodes(n, 3);
   Points centres(n, 3);
   for (Index k = 0; k < n; ++k) {
     nodes.row(k) = tris_.row(active[k].second);
     centres.row(k) = (x.row(nodes(k, 0)) + x.row(nodes(k, 1)) + x.row(nodes(k, 2))) / 3;
   }
-  const ElementPartition part =
-      partition_elements(nodes, static_cast<Index>(x.rows()), centres, kChunk);
+  const std::vector<Index> order =
+      schedule_.arrange(nodes, centres, static_cast<Index>(x.rows()), bound_);
   active_.resize(active.size());
-  for (Index k = 0; k < n; ++k) active_[k] = active[part.order[k]];
-  chunk_begin_ = part.chunk_begin;
-  color_begin_ = part.color_begin;
+  for (Index k = 0; k < n; ++k) active_[k] = active[order[k]];
 }
 
 void ObstacleContact::bind(const BlockSparseMatrix& hessian) {
-  offsets_ = hessian.clique_block_indices(tris_);
-  if (std::find(offsets_.begin(), offsets_.end(), -1) != offsets_.end())
-    throw std::logic_error("obstacles: the Hessian pattern lacks a triangle's coupling");
+  bound_ = &hessian;
+  schedule_.bind(hessian, name());
 }
 
 void ObstacleContact::add_couplings(SparsityBuilder& builder) const {
@@ -139,30 +129,21 @@ double ObstacleContact::triangle_derivatives(const Points& x, Index o, Index f,
 
 double ObstacleContact::evaluate(const Points& x, VectorX* gradient,
                                  BlockSparseMatrix* hessian) const {
-  const Index n = static_cast<Index>(active_.size());
   if (!gradient) {
-    return tbb::parallel_deterministic_reduce(
-        tbb::blocked_range<Index>(0, n, kChunk), 0.0,
-        [&](const tbb::blocked_range<Index>& r, double acc) {
-          for (Index k = r.begin(); k < r.end(); ++k)
-            acc += triangle_derivatives(x, active_[k].first, active_[k].second, nullptr, nullptr);
-          return acc;
-        },
-        std::plus<double>());
+    return schedule_.run(0.0, [&](Index k) {
+      return triangle_derivatives(x, active_[k].first, active_[k].second, nullptr, nullptr);
+    });
   }
-  if (hessian && offsets_.size() != 9 * static_cast<size_t>(tris_.rows()))
+  if (hessian && !schedule_.has_blocks())
     throw std::logic_error("obstacles: bind() the Hessian first");
-  // Colored chunks: each triangle's derivatives are added as soon as they are computed.
-  return run_by_color(color_begin_, 0.0, [&](Index c) {
-    double energy = 0;
+  // Each triangle's derivatives are added as soon as they are computed.
+  return schedule_.run(0.0, [&](Index k) {
     TriangleGradient grad;
     TriangleHessian hess;
-    for (Index k = chunk_begin_[c]; k < chunk_begin_[c + 1]; ++k) {
-      const auto [o, f] = active_[k];
-      energy += triangle_derivatives(x, o, f, &grad, hessian ? &hess : nullptr);
-      for (int a = 0; a < 3; ++a) gradient->segment<3>(3 * tris_(f, a)) += grad.segment<3>(3 * a);
-      if (hessian) hessian->add_blocks<3>(offsets_.data() + 9 * static_cast<size_t>(f), hess);
-    }
+    const auto [o, f] = active_[k];
+    const double energy = triangle_derivatives(x, o, f, &grad, hessian ? &hess : nullptr);
+    for (int a = 0; a < 3; ++a) gradient->segment<3>(3 * tris_(f, a)) += grad.segment<3>(3 * a);
+    if (hessian) hessian->add_blocks<3>(schedule_.blocks(k), hess);
     return energy;
   });
 }

@@ -7,6 +7,7 @@
 #include <variant>
 #include <vector>
 
+#include "contact/pair_schedule.hpp"
 #include "contact/penalty_derivatives.hpp"
 #include "core/force_module.hpp"
 #include "core/mesh.hpp"
@@ -34,8 +35,7 @@ struct Obstacle {
 
 /// Contact of the boundary triangles of the listed bodies with analytic obstacles. Derivatives
 /// come from the staged chain rule (field_polygon_penalty_derivatives); the triangles touching an
-/// obstacle are walked in colored chunks, as the material-depth pairs are, and add their
-/// derivatives through block offsets found once per pattern.
+/// obstacle are walked and scattered as the material-depth pairs are (PairSchedule).
 class ObstacleContact final : public ForceModule {
  public:
   /// `bodies`: the bodies that touch the obstacles (their boundary triangles).
@@ -62,10 +62,11 @@ class ObstacleContact final : public ForceModule {
   TriIndices tris_;
   std::vector<Obstacle> obstacles_;
   double load_ = 0;
-  std::vector<std::pair<Index, Index>> active_;   // (obstacle, triangle) with some corner inside,
-                                                  // in processing order
-  std::vector<Index> chunk_begin_, color_begin_;  // chunks of active_, colors of chunks
-  std::vector<Index> offsets_;                    // 9 block indices per triangle
+  // (obstacle, triangle) with some corner inside, in processing order; schedule_ has their
+  // triangles' corners.
+  std::vector<std::pair<Index, Index>> active_;
+  PairSchedule schedule_;
+  const BlockSparseMatrix* bound_ = nullptr;
 };
 
 }  // namespace depthfem

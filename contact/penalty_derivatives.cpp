@@ -519,54 +519,58 @@ void chain_rule(const typename L::VecU& Fu, typename L::MatU* Hu, const typename
   }
 }
 
+// W with its derivatives over z: zero for a polygon without area; otherwise the fan level over
+// u from the stage values, then the chain rule through the intermediates that `intermediates(st)`
+// gives (their S^T and count), with the curvature terms `curvature(s, Fs, Hxx, K)` adds.
+template <class L, class StagesFn, class IntermediatesFn, class CurvatureFn>
+double staged_penalty(const ClipPolygon& poly, double eps, double min_area2, StagesFn stages,
+                      IntermediatesFn intermediates, CurvatureFn curvature,
+                      Eigen::Matrix<double, L::kZ, 1>& gradient,
+                      Eigen::Matrix<double, L::kZ, L::kZ>* hessian) {
+  if (poly.size < 3) {
+    gradient.setZero();
+    if (hessian) hessian->setZero();
+    return 0;
+  }
+  const Stages<L> st = stages();
+  typename L::MatU Hu;
+  typename L::VecU Fu;
+  const double W = fan_level(st, eps, min_area2, Fu, hessian ? &Hu : nullptr);
+  const auto s = intermediates(st);
+  chain_rule<L>(
+      Fu, &Hu, s.St, s.count,
+      [&](const typename L::VecS& Fs, auto& Hxx, auto& K) { curvature(s, Fs, Hxx, K); }, gradient,
+      hessian);
+  return W;
+}
+
 }  // namespace
 
 double tet_polygon_penalty_derivatives(const ClipPolygon& poly, const std::array<Vec3, 4>& P,
                                        const std::array<Vec3, 3>& Q, const std::array<double, 4>& g,
                                        double eps, double min_area2, PairGradient& gradient,
                                        PairHessian* hessian) {
-  if (poly.size < 3) {
-    gradient.setZero();
-    if (hessian) hessian->setZero();
-    return 0;
-  }
-  Vec3 a;
-  const Stages<TetPair> st = tet_pair_stages(poly, P, Q, g, a);
-  // Level two: F(u) and its derivatives; then through the intermediates to z.
-  TetPair::MatU Hu;
-  TetPair::VecU Fu;
-  const double W = fan_level(st, eps, min_area2, Fu, hessian ? &Hu : nullptr);
-  const Intermediates s = intermediates(st, a);
-  chain_rule<TetPair>(
-      Fu, &Hu, s.St, s.count,
-      [&](const TetPair::VecS& Fs, auto& Hxx, auto& K) {
+  Vec3 a;  // gradient of the tet's depth field
+  return staged_penalty<TetPair>(
+      poly, eps, min_area2, [&] { return tet_pair_stages(poly, P, Q, g, a); },
+      [&](const Stages<TetPair>& st) { return intermediates(st, a); },
+      [&](const Intermediates& s, const TetPair::VecS& Fs, auto& Hxx, auto& K) {
         add_intermediate_curvature(a, s, Fs, Hxx, K);
       },
       gradient, hessian);
-  return W;
 }
 
 double field_polygon_penalty_derivatives(const ClipPolygon& poly, const std::array<Vec3, 3>& Q,
                                          const std::array<DepthSample, 3>& depth, double eps,
                                          double min_area2, TriangleGradient& gradient,
                                          TriangleHessian* hessian) {
-  if (poly.size < 3) {
-    gradient.setZero();
-    if (hessian) hessian->setZero();
-    return 0;
-  }
-  const Stages<FieldTriangle> st = field_triangle_stages(poly, Q, depth);
-  FieldTriangle::MatU Hu;
-  FieldTriangle::VecU Fu;
-  const double W = fan_level(st, eps, min_area2, Fu, hessian ? &Hu : nullptr);
-  const FieldIntermediates s = field_intermediates(st, depth);
-  chain_rule<FieldTriangle>(
-      Fu, &Hu, s.St, s.count,
-      [&](const FieldTriangle::VecS& Fs, auto& Hxx, auto&) {
+  return staged_penalty<FieldTriangle>(
+      poly, eps, min_area2, [&] { return field_triangle_stages(poly, Q, depth); },
+      [&](const Stages<FieldTriangle>& st) { return field_intermediates(st, depth); },
+      [&](const FieldIntermediates& s, const FieldTriangle::VecS& Fs, auto& Hxx, auto&) {
         add_field_curvature(s, depth, Fs, Hxx);
       },
       gradient, hessian);
-  return W;
 }
 
 }  // namespace depthfem

@@ -16,14 +16,19 @@
 namespace depthfem {
 namespace {
 
-TEST(BlockSparseMatrix, ScatteredBlocksEqualDenseAssembly) {
-  const TetMesh m = box_mesh({Vec3::Zero(), Vec3::Ones(), Eigen::Vector3i(2, 2, 1)});
-  const Index n = static_cast<Index>(m.X.rows());
-  SparsityBuilder builder(n);
+SparsityBuilder tet_couplings(const TetMesh& m) {
+  SparsityBuilder builder(static_cast<Index>(m.X.rows()));
   for (Index t = 0; t < m.tets.rows(); ++t) {
     const Index v[4] = {m.tets(t, 0), m.tets(t, 1), m.tets(t, 2), m.tets(t, 3)};
     builder.add_clique(v);
   }
+  return builder;
+}
+
+TEST(BlockSparseMatrix, ScatteredBlocksEqualDenseAssembly) {
+  const TetMesh m = box_mesh({Vec3::Zero(), Vec3::Ones(), Eigen::Vector3i(2, 2, 1)});
+  const Index n = static_cast<Index>(m.X.rows());
+  const SparsityBuilder builder = tet_couplings(m);
   BlockSparseMatrix A(builder);
   Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(3 * n, 3 * n);
   std::mt19937 rng(7);
@@ -55,11 +60,7 @@ TEST(BlockSparseMatrix, ScatteredBlocksEqualDenseAssembly) {
 TEST(BlockSparseMatrix, CliqueBlockIndicesMatchLookUpsAndAddDenseMatrices) {
   const TetMesh m = box_mesh({Vec3::Zero(), Vec3::Ones(), Eigen::Vector3i(3, 2, 2)});
   const Index n = static_cast<Index>(m.X.rows());
-  SparsityBuilder builder(n);
-  for (Index t = 0; t < m.tets.rows(); ++t) {
-    const Index v[4] = {m.tets(t, 0), m.tets(t, 1), m.tets(t, 2), m.tets(t, 3)};
-    builder.add_clique(v);
-  }
+  const SparsityBuilder builder = tet_couplings(m);
   BlockSparseMatrix A(builder), B(builder);
   const std::vector<Index> off = A.clique_block_indices(m.tets);
   ASSERT_EQ(off.size(), 16 * static_cast<size_t>(m.tets.rows()));

@@ -6,21 +6,13 @@
 
 #include "core/types.hpp"
 #include "integrators/batched_tet_kernel.hpp"
+#include "materials/all_models.hpp"
 #include "materials/material.hpp"
 
 namespace depthfem {
 namespace {
 
 using V = Lanes<kLanes>;
-
-std::vector<MaterialModel> all_models() {
-  return {NeoHookean::from_youngs(3e4, 0.4),
-          MooneyRivlin{4e3, 1e3, 2e4},
-          Veronda{1.5e3, 0.8, 2e4},
-          NearlyIncompressibleMooneyRivlin{4e3, 1e3, 2e5},
-          FiberReinforced<MooneyRivlin>{{4e3, 1e3, 2e4}, 2e3, 3.0},
-          FiberReinforced<Veronda>{{1.5e3, 0.8, 2e4}, 2e3, 3.0}};
-}
 
 // One tet's inputs in the scalar kernel's form.
 struct TetInput {

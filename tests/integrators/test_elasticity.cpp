@@ -10,19 +10,11 @@
 #include "core/mesh_generators.hpp"
 #include "integrators/elasticity.hpp"
 #include "integrators/tet_kernel.hpp"
+#include "materials/all_models.hpp"
 #include "materials/lanes.hpp"
 
 namespace depthfem {
 namespace {
-
-std::vector<MaterialModel> all_models() {
-  return {NeoHookean::from_youngs(3e4, 0.4),
-          MooneyRivlin{4e3, 1e3, 2e4},
-          Veronda{1.5e3, 0.8, 2e4},
-          NearlyIncompressibleMooneyRivlin{4e3, 1e3, 2e5},
-          FiberReinforced<MooneyRivlin>{{4e3, 1e3, 2e4}, 2e3, 3.0},
-          FiberReinforced<Veronda>{{1.5e3, 0.8, 2e4}, 2e3, 3.0}};
-}
 
 ElasticGroup whole_mesh(const TetMesh& m, const MaterialModel& model, const Vec3& fiber) {
   ElasticGroup g{model, std::vector<Index>(m.tets.rows()), Points()};
