@@ -28,7 +28,9 @@ class PairSchedule {
   /// lacks one (it was built from the module's couplings).
   void bind(const BlockSparseMatrix& hessian, const std::string& module);
   /// Whether every pair's blocks are known (the pattern holds all couplings).
-  bool has_blocks() const { return blocks_.size() == nodes_.size() * nodes_.cols(); }
+  bool has_blocks() const {
+    return blocks_.size() == static_cast<size_t>(nodes_.size() * nodes_.cols());
+  }
 
   Index size() const { return static_cast<Index>(nodes_.rows()); }
   /// Node a of pair k (in processing order).

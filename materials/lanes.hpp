@@ -5,7 +5,7 @@
 ///
 /// Lanes wrap GCC vector extensions, so +, -, *, / and comparisons are the compiler's own vector
 /// operations and a double on either side is broadcast. exp and log come from Eigen's packet math
-/// (accurate to about one unit in the last place), applied to as many native packets as W needs.
+/// (accurate to about one unit in the last place), applied to as many packets as W needs.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -139,10 +139,12 @@ void transpose(Lanes<W>* rows) {
 }
 
 namespace detail {
-// Applies an Eigen packet function to the W lanes, as many of the widest packets as fit.
+// Applies an Eigen packet function to the W lanes, as many of the widest packets of at most four
+// doubles as fit (GCC 12 warns falsely about uninitialised values inside Eigen's eight-lane exp
+// and log).
 template <int W, class F>
 Lanes<W> per_packet(const Lanes<W>& x, F f) {
-  using Packet = typename Eigen::internal::find_best_packet<double, W>::type;
+  using Packet = typename Eigen::internal::find_best_packet<double, (W < 4 ? W : 4)>::type;
   constexpr int kSize = Eigen::internal::unpacket_traits<Packet>::size;
   double in[W], out[W];
   x.store(in);
