@@ -59,7 +59,9 @@ void prefetch_blocks(const Index* off, int count, BlockSparseMatrix& H) {
 
 // Walks rows [begin, end) of a block in order: energy sum, and scatter of gradient / Hessian.
 // Whole batches of kLanes rows go through the batched kernel, the rows left over through the
-// scalar one.
+// scalar one. Each tet's 12x12 Hessian is complete between kernel and scatter (batch.hessian_of(l)
+// and set_hessian_of, local.hessian): a per-element modification such as a projection to positive
+// semi-definite belongs there.
 template <int kOrder, class M>
 double run_rows(const M& m, const TetBlock& b, const Index* scatter, const Points& x, Index begin,
                 Index end, VectorX* g, BlockSparseMatrix* H) {

@@ -1,5 +1,6 @@
 #pragma once
-/// The per-tet hyperelastic kernel: energy, gradient and 12x12 Hessian of one linear tet.
+/// The per-tet hyperelastic kernel: energy, gradient and 12x12 Hessian of one linear tet. It is the
+/// reference for the batched kernel (batched_tet_kernel.hpp) and runs the rows a batch leaves over.
 ///
 /// With Ds = [x1-x0, x2-x0, x3-x0] and D = Dm^-1, F = Ds D, so dF_ij / dDs_ka = delta_ik D_aj.
 /// Energy V psi(F); gradient on nodes 1..3 is V P D^T (column a), node 0 takes minus their sum.
