@@ -1,6 +1,5 @@
 #include "contact/pair_schedule.hpp"
 
-#include <algorithm>
 #include <stdexcept>
 
 namespace depthfem {
@@ -16,17 +15,13 @@ std::vector<Index> PairSchedule::arrange(const Nodes& nodes, const Points& centr
   for (Index k = 0; k < nodes.rows(); ++k) nodes_.row(k) = nodes.row(part.order[k]);
   chunk_begin_ = part.chunk_begin;
   color_begin_ = part.color_begin;
-  blocks_.clear();
-  if (bound) {
-    blocks_ = bound->clique_block_indices(nodes_);
-    if (std::find(blocks_.begin(), blocks_.end(), -1) != blocks_.end()) blocks_.clear();
-  }
+  blocks_ = bound ? bound->clique_block_indices(nodes_) : std::vector<Index>();
   return part.order;
 }
 
 void PairSchedule::bind(const BlockSparseMatrix& hessian, const std::string& module) {
   blocks_ = hessian.clique_block_indices(nodes_);
-  if (std::find(blocks_.begin(), blocks_.end(), -1) != blocks_.end())
+  if (!has_blocks())
     throw std::logic_error(module + ": the Hessian pattern lacks a pair's coupling");
 }
 

@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <stdexcept>
 
 namespace depthfem {
@@ -44,14 +45,18 @@ std::vector<Index> BlockSparseMatrix::clique_block_indices(
     const Eigen::Ref<const Eigen::Matrix<Index, Eigen::Dynamic, Eigen::Dynamic>>& cliques) const {
   const Index rows = static_cast<Index>(cliques.rows()), K = static_cast<Index>(cliques.cols());
   std::vector<Index> off(static_cast<size_t>(rows) * K * K);
-  tbb::parallel_for(tbb::blocked_range<Index>(0, rows, 1024),
-                    [&](const tbb::blocked_range<Index>& r) {
-                      for (Index e = r.begin(); e < r.end(); ++e)
-                        for (Index a = 0; a < K; ++a)
-                          for (Index b = 0; b < K; ++b)
-                            off[(static_cast<size_t>(e) * K + a) * K + b] =
-                                block_index(cliques(e, a), cliques(e, b));
-                    });
+  std::atomic<bool> missing{false};
+  tbb::parallel_for(
+      tbb::blocked_range<Index>(0, rows, 4096), [&](const tbb::blocked_range<Index>& r) {
+        for (Index e = r.begin(); e < r.end() && !missing.load(std::memory_order_relaxed); ++e)
+          for (Index a = 0; a < K; ++a)
+            for (Index b = 0; b < K; ++b) {
+              const Index k = block_index(cliques(e, a), cliques(e, b));
+              if (k < 0) missing = true;
+              off[(static_cast<size_t>(e) * K + a) * K + b] = k;
+            }
+      });
+  if (missing) off.clear();
   return off;
 }
 

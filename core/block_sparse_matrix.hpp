@@ -41,7 +41,8 @@ class BlockSparseMatrix {
   /// Index of block (i, j); -1 when nodes i and j are not coupled.
   Index block_index(Index i, Index j) const;
   /// Block indices of the node pairs of every row of `cliques` (#rows x K node indices): (a, b) of
-  /// row r at K K r + K a + b, -1 where nodes are not coupled. TBB-parallel over rows.
+  /// row r at K K r + K a + b; empty as soon as some pair of nodes is found not coupled (the
+  /// search stops there). TBB-parallel over rows.
   std::vector<Index> clique_block_indices(
       const Eigen::Ref<const Eigen::Matrix<Index, Eigen::Dynamic, Eigen::Dynamic>>& cliques) const;
   /// Blocks of row node i span [row_begin(i), row_begin(i + 1)).

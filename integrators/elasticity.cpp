@@ -1,6 +1,5 @@
 #include "integrators/elasticity.hpp"
 
-#include <algorithm>
 #include <stdexcept>
 
 #include "core/element_partition.hpp"
@@ -136,7 +135,7 @@ void Elasticity::add_couplings(SparsityBuilder& builder) const {
 void Elasticity::bind(const BlockSparseMatrix& H) {
   for (Group& grp : groups_) {
     grp.scatter = H.clique_block_indices(grp.block.nodes);
-    if (std::find(grp.scatter.begin(), grp.scatter.end(), -1) != grp.scatter.end())
+    if (grp.scatter.size() != 16 * static_cast<size_t>(grp.block.size()))
       throw std::logic_error("elasticity: Hessian pattern lacks a tet coupling");
   }
 }
