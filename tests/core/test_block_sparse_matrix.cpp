@@ -115,6 +115,21 @@ TEST(ElementPartition, ChunksOfAColorShareNoNodeAndEveryElementAppearsOnce) {
   EXPECT_GE(p.num_colors(), 2);
 }
 
+// Chunks that all share a node need a color each: 100 of them, more than one 64-bit word of
+// colors per node holds.
+TEST(ElementPartition, ChunksSharingANodeGetAColorEach) {
+  const Index n = 100;
+  Eigen::Matrix<Index, Eigen::Dynamic, Eigen::Dynamic> elements(n, 2);
+  Points centroids(n, 3);
+  for (Index e = 0; e < n; ++e) {
+    elements.row(e) << 0, e + 1;
+    centroids.row(e) << e, 0, 0;
+  }
+  const ElementPartition p = partition_elements(elements, n + 1, centroids, 1);
+  EXPECT_EQ(p.num_colors(), n);
+  for (Index c = 0; c < p.num_colors(); ++c) EXPECT_EQ(p.color_begin[c + 1] - p.color_begin[c], 1);
+}
+
 // run_by_color calls every chunk once, starts a chunk only after every chunk of the earlier colors
 // has finished, and returns the same sum (bit for bit) on any number of threads.
 TEST(ElementPartition, RunByColorVisitsChunksOnceColorAfterColor) {
