@@ -2,10 +2,11 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <functional>
+#include <numeric>
+#include <stdexcept>
 
 #include "contact/contact_surface.hpp"
 #include "contact/penalty.hpp"
@@ -14,7 +15,7 @@
 namespace depthfem {
 
 namespace {
-constexpr Index kChunk = 256;  // triangles (or pairs) per task; fixed for reproducible results
+constexpr Index kChunk = 256;  // triangles per task of the pair search
 
 std::array<Vec3, 4> tet_corners(const Points& x, const TetIndices& tets, Index t) {
   return {x.row(tets(t, 0)), x.row(tets(t, 1)), x.row(tets(t, 2)), x.row(tets(t, 3))};
@@ -83,26 +84,30 @@ void MaterialDepthContact::prepare(const Points& x) {
       });
     }
   });
-  pairs_.clear();
+  std::vector<ContactPair> all;
   stats_ = ContactStats{};
   for (Index c = 0; c < chunks; ++c) {
-    pairs_.insert(pairs_.end(), found[c].begin(), found[c].end());
+    all.insert(all.end(), found[c].begin(), found[c].end());
     stats_.candidates += candidates[c];
   }
-  stats_.active = static_cast<Index>(pairs_.size());
-  // A pair whose nodes are not coupled in the bound pattern needs a new pattern.
-  pattern_changed_ = false;
-  if (bound_) {
-    for (const ContactPair& p : pairs_) {
-      const std::array<Index, 7> v = pair_nodes(p);
-      for (Index i : v)
-        for (Index j : v)
-          if (bound_->block_index(i, j) < 0) {
-            pattern_changed_ = true;
-            return;
-          }
-    }
+  const Index n_pairs = static_cast<Index>(all.size());
+  stats_.active = n_pairs;
+  // Processing order: along a Morton curve through the polygons' centres, in colored chunks.
+  PairSchedule::Nodes nodes(n_pairs, 7);
+  Points centres(n_pairs, 3);
+  for (Index k = 0; k < n_pairs; ++k) {
+    const ContactPair& p = all[k];
+    nodes.row(k) = Eigen::Map<const Eigen::Matrix<Index, 1, 7>>(pair_nodes(p).data());
+    Vec3 centre = Vec3::Zero();
+    for (int v = 0; v < p.polygon.size; ++v) centre += p.polygon.x[v];
+    centres.row(k) = centre.transpose() / p.polygon.size;
   }
+  const std::vector<Index> order =
+      schedule_.arrange(nodes, centres, static_cast<Index>(depth_.size()), bound_);
+  pairs_.resize(all.size());
+  for (Index k = 0; k < n_pairs; ++k) pairs_[k] = all[order[k]];
+  // A pair whose nodes are not coupled in the bound pattern needs a new one (bind() follows).
+  pattern_changed_ = bound_ && !schedule_.has_blocks();
 }
 
 void MaterialDepthContact::add_couplings(SparsityBuilder& builder) const {
@@ -115,6 +120,7 @@ void MaterialDepthContact::add_couplings(SparsityBuilder& builder) const {
 void MaterialDepthContact::bind(const BlockSparseMatrix& hessian) {
   bound_ = &hessian;
   pattern_changed_ = false;
+  schedule_.bind(hessian, name());
 }
 
 std::array<double, 4> MaterialDepthContact::pair_depths(const ContactPair& p) const {
@@ -139,35 +145,19 @@ double MaterialDepthContact::pair_derivatives(const Points& x, const ContactPair
 
 double MaterialDepthContact::evaluate(const Points& x, VectorX* gradient,
                                       BlockSparseMatrix* hessian) const {
-  const Index n = static_cast<Index>(pairs_.size());
-  if (!gradient) {
-    return tbb::parallel_deterministic_reduce(
-        tbb::blocked_range<Index>(0, n, kChunk), 0.0,
-        [&](const tbb::blocked_range<Index>& r, double acc) {
-          for (Index k = r.begin(); k < r.end(); ++k) acc += pair_energy(x, pairs_[k]);
-          return acc;
-        },
-        std::plus<double>());
-  }
-  // Derivatives per pair in parallel (Hessians only when asked for), then scattered in pair order.
-  std::vector<double> energies(static_cast<size_t>(n));
-  std::vector<PairGradient> gradients(static_cast<size_t>(n));
-  std::vector<PairHessian> hessians(hessian ? static_cast<size_t>(n) : 0);
-  tbb::parallel_for(tbb::blocked_range<Index>(0, n, 16), [&](const tbb::blocked_range<Index>& r) {
-    for (Index k = r.begin(); k < r.end(); ++k)
-      energies[k] = pair_derivatives(x, pairs_[k], gradients[k], hessian ? &hessians[k] : nullptr);
-  });
-  double energy = 0;
-  for (Index k = 0; k < n; ++k) {
-    const std::array<Index, 7> v = pair_nodes(pairs_[k]);
-    energy += energies[k];
-    for (int a = 0; a < 7; ++a) gradient->segment<3>(3 * v[a]) += gradients[k].segment<3>(3 * a);
-    if (!hessian) continue;
+  if (!gradient) return schedule_.run(0.0, [&](Index k) { return pair_energy(x, pairs_[k]); });
+  if (hessian && !schedule_.has_blocks())
+    throw std::logic_error("contact: bind() the Hessian after prepare() found new pairs");
+  // Each pair's derivatives are added as soon as they are computed.
+  return schedule_.run(0.0, [&](Index k) {
+    PairGradient grad;
+    PairHessian hess;
+    const double energy = pair_derivatives(x, pairs_[k], grad, hessian ? &hess : nullptr);
     for (int a = 0; a < 7; ++a)
-      for (int b = 0; b < 7; ++b)
-        hessian->add_block(hessian->block_index(v[a], v[b]), hessians[k].block<3, 3>(3 * a, 3 * b));
-  }
-  return energy;
+      gradient->segment<3>(3 * schedule_.node(k, a)) += grad.segment<3>(3 * a);
+    if (hessian) hessian->add_blocks<7>(schedule_.blocks(k), hess);
+    return energy;
+  });
 }
 
 void MaterialDepthContact::report(const Points& x, StepRecord& step) const {
@@ -180,8 +170,12 @@ void MaterialDepthContact::report(const Points& x, StepRecord& step) const {
   });
   ContactInterfaces::Tally tally = interfaces_.tally(step);
   step.surface.resize(static_cast<Index>(tris_.rows()));
-  // A triangle's pairs are consecutive; their forces are netted per body the triangle enters, so
-  // that splitting a triangle among tets adds no force: the in-plane pulls of the pieces cancel.
+  // A triangle's pairs, taken together (by triangle, then in processing order), are netted per
+  // body the triangle enters, so that splitting a triangle among tets adds no force: the
+  // in-plane pulls of the pieces cancel.
+  std::vector<Index> by_triangle(static_cast<size_t>(n));
+  std::iota(by_triangle.begin(), by_triangle.end(), Index(0));
+  std::ranges::stable_sort(by_triangle, {}, [&](Index k) { return pairs_[k].tri; });
   struct Share {
     Index body;
     Vec3 force;
@@ -195,9 +189,11 @@ void MaterialDepthContact::report(const Points& x, StepRecord& step) const {
     }
     shares.clear();
   };
-  for (Index k = 0; k < n; ++k) {  // in pair order: the same sums for any number of threads
+  // In a fixed order: the same sums for any number of threads.
+  for (Index j = 0; j < n; ++j) {
+    const Index k = by_triangle[j];
     const ContactPair& p = pairs_[k];
-    if (k > 0 && p.tri != pairs_[k - 1].tri) flush(pairs_[k - 1].tri);
+    if (j > 0 && p.tri != pairs_[by_triangle[j - 1]].tri) flush(pairs_[by_triangle[j - 1]].tri);
     // A polygon with zero depth everywhere (a surface resting on another, a bonded interface)
     // touches but does not press: no force, no contact area.
     if (!(energies[k] > 0)) continue;
@@ -220,7 +216,7 @@ void MaterialDepthContact::report(const Points& x, StepRecord& step) const {
     share->moments.area += moments.area;
     share->moments.depth_integral += moments.depth_integral;
   }
-  if (n > 0) flush(pairs_[n - 1].tri);
+  if (n > 0) flush(pairs_[by_triangle[n - 1]].tri);
   tally.finish();
 }
 

@@ -8,6 +8,7 @@
 #include "contact/aabb_tree.hpp"
 #include "contact/clip.hpp"
 #include "contact/contact_interfaces.hpp"
+#include "contact/pair_schedule.hpp"
 #include "contact/penalty_derivatives.hpp"
 #include "core/force_module.hpp"
 #include "core/mesh.hpp"
@@ -33,8 +34,11 @@ struct ContactStats {
 
 /// The contact force module. Geometry (tree, clipping, depth lookup) lives in aabb_tree, clip
 /// and material_depth; this class pairs elements and integrates the penalty (penalty.hpp).
-/// Pair search and integration run in parallel; results are summed in pair order, so they do
-/// not depend on the number of threads.
+/// Pair search and integration run in parallel. prepare() orders the pairs (PairSchedule) and
+/// finds their 49 Hessian blocks each in the bound pattern; evaluate() adds each pair's
+/// derivatives as it computes them, chunks of a color concurrently, without searching or
+/// allocating. Every block and gradient entry receives its terms in pair order, whatever the
+/// number of threads.
 class MaterialDepthContact final : public ForceModule {
  public:
   /// `depth` per node [m] (material_depth(mesh)).
@@ -55,6 +59,7 @@ class MaterialDepthContact final : public ForceModule {
   /// step.surface.
   void report(const Points& x, StepRecord& step) const override;
 
+  /// The active pairs of the last prepare(), in processing order.
   const std::vector<ContactPair>& pairs() const { return pairs_; }
   ContactStats stats() const { return stats_; }
 
@@ -76,6 +81,7 @@ class MaterialDepthContact final : public ForceModule {
   double min_area2_ = 0;
   AabbTree tree_;
   std::vector<ContactPair> pairs_;
+  PairSchedule schedule_;  // of pairs_: tet corners, triangle corners
   ContactStats stats_;
   ContactInterfaces interfaces_;
   const BlockSparseMatrix* bound_ = nullptr;

@@ -1,5 +1,7 @@
 #include "contact/node_to_surface_contact.hpp"
 
+#include <stdexcept>
+
 #include "contact/material_depth.hpp"
 #include "contact/penalty.hpp"
 
@@ -50,7 +52,7 @@ void NodeToSurfaceContact::begin_step(const Points& x) {
 void NodeToSurfaceContact::prepare(const Points& x) {
   tet_tree_.refit(tet_boxes(x, tets_));
   tri_tree_.refit(triangle_boxes(x, tris_));
-  pairs_.clear();
+  std::vector<std::pair<Index, Index>> pairs;
   for (Index i : surface_nodes_) {
     const Vec3 p = x.row(i);
     // Inside another body: in one of its tets (barycentric coordinates all >= 0).
@@ -75,19 +77,29 @@ void NodeToSurfaceContact::prepare(const Points& x) {
       if (d < best) best = d, nearest = f;
       return best;
     });
-    if (nearest >= 0) pairs_.emplace_back(i, nearest);
+    if (nearest >= 0) pairs.emplace_back(i, nearest);
   }
-  pattern_changed_ = false;
-  if (bound_) {
-    for (const auto& [i, f] : pairs_)
-      for (int k = 0; k < 3; ++k)
-        if (bound_->block_index(i, tris_(f, k)) < 0) pattern_changed_ = true;
+  // Processing order: colored chunks along a Morton curve (PairSchedule).
+  const Index n = static_cast<Index>(pairs.size());
+  PairSchedule::Nodes nodes(n, 4);
+  Points centres(n, 3);
+  for (Index k = 0; k < n; ++k) {
+    const auto [i, f] = pairs[k];
+    nodes.row(k) << i, tris_(f, 0), tris_(f, 1), tris_(f, 2);
+    centres.row(k) = x.row(i);
   }
+  const std::vector<Index> order =
+      schedule_.arrange(nodes, centres, static_cast<Index>(x.rows()), bound_);
+  pairs_.resize(pairs.size());
+  for (Index k = 0; k < n; ++k) pairs_[k] = pairs[order[k]];
+  // Missing couplings in the bound pattern need a new one (bind() follows).
+  pattern_changed_ = bound_ && !schedule_.has_blocks();
 }
 
 void NodeToSurfaceContact::add_couplings(SparsityBuilder& builder) const {
-  for (const auto& [i, f] : pairs_) {
-    const Index v[4] = {i, tris_(f, 0), tris_(f, 1), tris_(f, 2)};
+  for (Index k = 0; k < schedule_.size(); ++k) {
+    const Index v[4] = {schedule_.node(k, 0), schedule_.node(k, 1), schedule_.node(k, 2),
+                        schedule_.node(k, 3)};
     builder.add_clique(v);
   }
 }
@@ -95,31 +107,29 @@ void NodeToSurfaceContact::add_couplings(SparsityBuilder& builder) const {
 void NodeToSurfaceContact::bind(const BlockSparseMatrix& hessian) {
   bound_ = &hessian;
   pattern_changed_ = false;
+  schedule_.bind(hessian, name());
+}
+
+double NodeToSurfaceContact::pair_energy(const Points& x, Index k) const {
+  return node_energy(make_point<double>(x.row(schedule_.node(k, 0)), 0),
+                     make_point<double>(x.row(schedule_.node(k, 1)), 0),
+                     make_point<double>(x.row(schedule_.node(k, 2)), 0),
+                     make_point<double>(x.row(schedule_.node(k, 3)), 0),
+                     penalty_ * node_area_(schedule_.node(k, 0)));
 }
 
 double NodeToSurfaceContact::evaluate(const Points& x, VectorX* gradient,
                                       BlockSparseMatrix* hessian) const {
-  using D = Dual2<12>;
-  double energy = 0;
-  for (const auto& [i, f] : pairs_) {
-    const Index v[4] = {i, tris_(f, 0), tris_(f, 1), tris_(f, 2)};
-    const double eps_area = penalty_ * node_area_(i);
-    if (!gradient) {
-      energy += node_energy(make_point<double>(x.row(v[0]), 0), make_point<double>(x.row(v[1]), 0),
-                            make_point<double>(x.row(v[2]), 0), make_point<double>(x.row(v[3]), 0),
-                            eps_area);
-      continue;
-    }
-    const D W = pair_derivatives(x, i, f);
-    energy += W.v;
-    for (int a = 0; a < 4; ++a) {
-      gradient->segment<3>(3 * v[a]) += W.g.segment<3>(3 * a);
-      if (!hessian) continue;
-      for (int b = 0; b < 4; ++b)
-        hessian->add_block(hessian->block_index(v[a], v[b]), W.h.block<3, 3>(3 * a, 3 * b));
-    }
-  }
-  return energy;
+  if (!gradient) return schedule_.run(0.0, [&](Index k) { return pair_energy(x, k); });
+  if (hessian && !schedule_.has_blocks())
+    throw std::logic_error("node-to-surface contact: bind() the Hessian after prepare()");
+  return schedule_.run(0.0, [&](Index k) {
+    const Dual2<12> W = pair_derivatives(x, pairs_[k].first, pairs_[k].second);
+    for (int a = 0; a < 4; ++a)
+      gradient->segment<3>(3 * schedule_.node(k, a)) += W.g.segment<3>(3 * a);
+    if (hessian) hessian->add_blocks<4>(schedule_.blocks(k), W.h);
+    return W.v;
+  });
 }
 
 Dual2<12> NodeToSurfaceContact::pair_derivatives(const Points& x, Index i, Index f) const {

@@ -10,6 +10,7 @@
 #include "contact/aabb_tree.hpp"
 #include "contact/contact_interfaces.hpp"
 #include "contact/dual.hpp"
+#include "contact/pair_schedule.hpp"
 #include "core/force_module.hpp"
 #include "core/mesh.hpp"
 
@@ -30,10 +31,12 @@ class NodeToSurfaceContact final : public ForceModule {
   /// share of its node.
   void report(const Points& x, StepRecord& step) const override;
 
-  /// Active (node, triangle) pairs of the last prepare().
+  /// Active (node, triangle) pairs of the last prepare(), in processing order (PairSchedule).
   const std::vector<std::pair<Index, Index>>& pairs() const { return pairs_; }
 
  private:
+  /// Energy of pair k (processing order) without derivatives.
+  double pair_energy(const Points& x, Index k) const;
   /// Energy of node i against triangle f with derivatives in (node, triangle corners).
   Dual2<12> pair_derivatives(const Points& x, Index i, Index f) const;
 
@@ -47,6 +50,7 @@ class NodeToSurfaceContact final : public ForceModule {
   AabbTree tet_tree_, tri_tree_;
   std::vector<std::pair<Index, Index>> pairs_;
   ContactInterfaces interfaces_;
+  PairSchedule schedule_;  // of pairs_: node, triangle corners
   const BlockSparseMatrix* bound_ = nullptr;
   bool pattern_changed_ = false;
 };

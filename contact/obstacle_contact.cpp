@@ -1,7 +1,6 @@
 #include "contact/obstacle_contact.hpp"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
+#include <stdexcept>
 
 #include "contact/contact_surface.hpp"
 #include "contact/penalty.hpp"
@@ -16,21 +15,27 @@ struct Overloaded : F... {
   using F::operator()...;
 };
 
-// Depth of point q into the obstacle at load factor `load` (positive inside).
-template <class S>
-S obstacle_depth(const Obstacle& o, double load, const V3<S>& q) {
+// Depth of point q into the obstacle at load factor `load` (positive inside), with its gradient
+// and Hessian in q: a plane's depth n . (a - q) is linear; a sphere's R - |q - c| has gradient
+// -m and Hessian -(I - m m^T) / |q - c|, m = (q - c) / |q - c|.
+DepthSample obstacle_depth(const Obstacle& o, double load, const Vec3& q) {
   const Vec3 shift = load * o.motion;
-  return std::visit(Overloaded{[&](const PlaneObstacle& p) -> S {
-                                 const Vec3 n = p.normal.normalized(), a = p.point + shift;
-                                 return (q.x * (-n(0)) + q.y * (-n(1)) + q.z * (-n(2))) + n.dot(a);
-                               },
-                               [&](const SphereObstacle& s) -> S {
-                                 using std::sqrt;
-                                 const Vec3 c = s.center + shift;
-                                 const V3<S> d{q.x + (-c(0)), q.y + (-c(1)), q.z + (-c(2))};
-                                 return -sqrt(d.dot(d)) + s.radius;
-                               }},
-                    o.shape);
+  DepthSample d;
+  std::visit(Overloaded{[&](const PlaneObstacle& p) {
+                          const Vec3 n = p.normal.normalized();
+                          d.value = n.dot(p.point + shift - q);
+                          d.gradient = -n;
+                        },
+                        [&](const SphereObstacle& s) {
+                          const Vec3 r = q - (s.center + shift);
+                          const double length = r.norm();
+                          const Vec3 m = r / length;
+                          d.value = s.radius - length;
+                          d.gradient = -m;
+                          d.hessian = -(Mat3::Identity() - m * m.transpose()) / length;
+                        }},
+             o.shape);
+  return d;
 }
 
 }  // namespace
@@ -67,15 +72,32 @@ void ObstacleContact::set_load(double load) {
 }
 
 void ObstacleContact::prepare(const Points& x) {
-  active_.clear();
+  std::vector<std::pair<Index, Index>> active;
   for (Index o = 0; o < static_cast<Index>(obstacles_.size()); ++o)
     for (Index f = 0; f < tris_.rows(); ++f)
       for (int k = 0; k < 3; ++k)
-        if (obstacle_depth<double>(obstacles_[o], load_,
-                                   make_point<double>(x.row(tris_(f, k)), 0)) > 0) {
-          active_.emplace_back(o, f);
+        if (obstacle_depth(obstacles_[o], load_, x.row(tris_(f, k))).value > 0) {
+          active.emplace_back(o, f);
           break;
         }
+  // Processing order: colored chunks along a Morton curve; all triangles are coupled in the
+  // pattern, so a bound pattern has every block.
+  const Index n = static_cast<Index>(active.size());
+  PairSchedule::Nodes nodes(n, 3);
+  Points centres(n, 3);
+  for (Index k = 0; k < n; ++k) {
+    nodes.row(k) = tris_.row(active[k].second);
+    centres.row(k) = (x.row(nodes(k, 0)) + x.row(nodes(k, 1)) + x.row(nodes(k, 2))) / 3;
+  }
+  const std::vector<Index> order =
+      schedule_.arrange(nodes, centres, static_cast<Index>(x.rows()), bound_);
+  active_.resize(active.size());
+  for (Index k = 0; k < n; ++k) active_[k] = active[order[k]];
+}
+
+void ObstacleContact::bind(const BlockSparseMatrix& hessian) {
+  bound_ = &hessian;
+  schedule_.bind(hessian, name());
 }
 
 void ObstacleContact::add_couplings(SparsityBuilder& builder) const {
@@ -87,45 +109,46 @@ void ObstacleContact::add_couplings(SparsityBuilder& builder) const {
   }
 }
 
-template <class S, class Corner>
-S ObstacleContact::triangle_energy(const Obstacle& o, const Corner& Q) const {
-  const std::array<S, 3> G = {obstacle_depth<S>(o, load_, Q[0]), obstacle_depth<S>(o, load_, Q[1]),
-                              obstacle_depth<S>(o, load_, Q[2])};
-  std::array<Vec3, 3> q;
-  for (int k = 0; k < 3; ++k) q[k] = Vec3(value_of(Q[k].x), value_of(Q[k].y), value_of(Q[k].z));
+double ObstacleContact::triangle_derivatives(const Points& x, Index o, Index f,
+                                             TriangleGradient* gradient,
+                                             TriangleHessian* hessian) const {
+  std::array<Vec3, 3> Q;
+  std::array<DepthSample, 3> depth;
+  for (int k = 0; k < 3; ++k) {
+    Q[k] = x.row(tris_(f, k));
+    depth[k] = obstacle_depth(obstacles_[o], load_, Q[k]);
+  }
   const ClipPolygon poly =
-      clip_triangle_by_field(q, {value_of(G[0]), value_of(G[1]), value_of(G[2])});
-  return field_polygon_penalty(poly, Q, G, o.penalty, 0.0);
-}
-
-Dual2<9> ObstacleContact::triangle_derivatives(const Points& x, Index o, Index f) const {
-  std::array<V3<Dual2<9>>, 3> Q;
-  for (int k = 0; k < 3; ++k) Q[k] = make_point<Dual2<9>>(x.row(tris_(f, k)), 3 * k);
-  return triangle_energy<Dual2<9>>(obstacles_[o], Q);
+      clip_triangle_by_field(Q, {depth[0].value, depth[1].value, depth[2].value});
+  if (!gradient) {
+    std::array<V3<double>, 3> Qv;
+    for (int k = 0; k < 3; ++k) Qv[k] = make_point<double>(Q[k], 0);
+    return field_polygon_penalty(poly, Qv, {depth[0].value, depth[1].value, depth[2].value},
+                                 obstacles_[o].penalty, 0.0);
+  }
+  return field_polygon_penalty_derivatives(poly, Q, depth, obstacles_[o].penalty, 0.0, *gradient,
+                                           hessian);
 }
 
 double ObstacleContact::evaluate(const Points& x, VectorX* gradient,
                                  BlockSparseMatrix* hessian) const {
-  using D = Dual2<9>;
-  double energy = 0;
-  for (const auto& [o, f] : active_) {
-    if (!gradient) {
-      std::array<V3<double>, 3> Q;
-      for (int k = 0; k < 3; ++k) Q[k] = make_point<double>(x.row(tris_(f, k)), 0);
-      energy += triangle_energy<double>(obstacles_[o], Q);
-      continue;
-    }
-    const D W = triangle_derivatives(x, o, f);
-    energy += W.v;
-    for (int a = 0; a < 3; ++a) {
-      gradient->segment<3>(3 * tris_(f, a)) += W.g.segment<3>(3 * a);
-      if (!hessian) continue;
-      for (int b = 0; b < 3; ++b)
-        hessian->add_block(hessian->block_index(tris_(f, a), tris_(f, b)),
-                           W.h.block<3, 3>(3 * a, 3 * b));
-    }
+  if (!gradient) {
+    return schedule_.run(0.0, [&](Index k) {
+      return triangle_derivatives(x, active_[k].first, active_[k].second, nullptr, nullptr);
+    });
   }
-  return energy;
+  if (hessian && !schedule_.has_blocks())
+    throw std::logic_error("obstacles: bind() the Hessian first");
+  // Each triangle's derivatives are added as soon as they are computed.
+  return schedule_.run(0.0, [&](Index k) {
+    TriangleGradient grad;
+    TriangleHessian hess;
+    const auto [o, f] = active_[k];
+    const double energy = triangle_derivatives(x, o, f, &grad, hessian ? &hess : nullptr);
+    for (int a = 0; a < 3; ++a) gradient->segment<3>(3 * tris_(f, a)) += grad.segment<3>(3 * a);
+    if (hessian) hessian->add_blocks<3>(schedule_.blocks(k), hess);
+    return energy;
+  });
 }
 
 void ObstacleContact::report(const Points& x, StepRecord& step) const {
@@ -135,12 +158,10 @@ void ObstacleContact::report(const Points& x, StepRecord& step) const {
   step.surface.resize(num_mesh_tris_);
   for (const auto& [o, f] : active_) {
     std::array<Vec3, 3> q;
-    std::array<V3<double>, 3> Q;
     std::array<double, 3> G;
     for (int k = 0; k < 3; ++k) {
       q[k] = x.row(tris_(f, k));
-      Q[k] = make_point<double>(q[k], 0);
-      G[k] = obstacle_depth<double>(obstacles_[o], load_, Q[k]);
+      G[k] = obstacle_depth(obstacles_[o], load_, q[k]).value;
     }
     InterfaceForce& row = step.contact[first + static_cast<size_t>(o)];
     const ClipPolygon p = clip_triangle_by_field(q, G);
@@ -148,8 +169,9 @@ void ObstacleContact::report(const Points& x, StepRecord& step) const {
     for (int k = 0; k < p.size; ++k)
       if (p.vertex[k].kind == ClipVertex::Kind::kTriangleVertex) depth[k] = G[p.vertex[k].a];
     const PolygonMoments moments = polygon_moments(p, depth);
-    const Dual2<9> W = triangle_derivatives(x, o, f);  // the force on the triangle is -grad W
-    const Vec3 on_triangle = -W.g.reshaped(3, 3).rowwise().sum();
+    TriangleGradient grad;  // the force on the triangle is -grad W
+    triangle_derivatives(x, o, f, &grad, nullptr);
+    const Vec3 on_triangle = -grad.reshaped(3, 3).rowwise().sum();
     row.area += moments.area;
     row.force += on_triangle;
     row.magnitude += on_triangle.norm();

@@ -7,7 +7,8 @@
 #include <variant>
 #include <vector>
 
-#include "contact/dual.hpp"
+#include "contact/pair_schedule.hpp"
+#include "contact/penalty_derivatives.hpp"
 #include "core/force_module.hpp"
 #include "core/mesh.hpp"
 
@@ -32,7 +33,9 @@ struct Obstacle {
   double penalty = 1e6;  ///< eps [Pa/m]
 };
 
-/// Contact of the boundary triangles of the listed bodies with analytic obstacles.
+/// Contact of the boundary triangles of the listed bodies with analytic obstacles. Derivatives
+/// come from the staged chain rule (field_polygon_penalty_derivatives); the triangles touching an
+/// obstacle are walked and scattered as the material-depth pairs are (PairSchedule).
 class ObstacleContact final : public ForceModule {
  public:
   /// `bodies`: the bodies that touch the obstacles (their boundary triangles).
@@ -43,6 +46,7 @@ class ObstacleContact final : public ForceModule {
   void set_load(double load) override;
   void prepare(const Points& x) override;
   void add_couplings(SparsityBuilder& builder) const override;
+  void bind(const BlockSparseMatrix& hessian) override;
   bool pattern_changed() const override { return false; }
   double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
 
@@ -52,18 +56,20 @@ class ObstacleContact final : public ForceModule {
   void report(const Points& x, StepRecord& step) const override;
 
  private:
-  template <class S, class Corner>
-  S triangle_energy(const Obstacle& o, const Corner& Q) const;
-  /// Energy of triangle f against obstacle o with its gradient and Hessian in the 9 corner
-  /// coordinates.
-  Dual2<9> triangle_derivatives(const Points& x, Index o, Index f) const;
+  // Energy of triangle f in obstacle o, with its gradient and Hessian where asked for.
+  double triangle_derivatives(const Points& x, Index o, Index f, TriangleGradient* gradient,
+                              TriangleHessian* hessian) const;
 
   TriIndices tris_;
   std::vector<Index> tri_ids_;  // mesh triangle of each row of tris_
   Index num_mesh_tris_ = 0;
   std::vector<Obstacle> obstacles_;
   double load_ = 0;
-  std::vector<std::pair<Index, Index>> active_;  // (obstacle, triangle) with some corner inside
+  // (obstacle, triangle) with some corner inside, in processing order; schedule_ has their
+  // triangles' corners.
+  std::vector<std::pair<Index, Index>> active_;
+  PairSchedule schedule_;
+  const BlockSparseMatrix* bound_ = nullptr;
 };
 
 }  // namespace depthfem

@@ -1,8 +1,8 @@
 #pragma once
 /// Penalty energy of one clipped polygon (paper section 5.3, steps 4 and 5), written once for any
-/// scalar type: double for energies, Dual2<N> for exact gradients and Hessians (the obstacle and
-/// node-to-surface modules, and the test oracle of the staged derivatives of tet_polygon_penalty
-/// in penalty_derivatives.hpp).
+/// scalar type: double for energies, Dual2<N> for exact gradients and Hessians (the node-to-surface
+/// module, and the test oracle of the staged derivatives of tet_polygon_penalty and
+/// field_polygon_penalty in penalty_derivatives.hpp).
 ///
 /// For a sub-triangle R1 R2 R3 of area A with linearly interpolated depths G1..G3,
 ///   W = eps/2 int g^2 da = eps A / 12 (G1^2 + G2^2 + G3^2 + G1 G2 + G1 G3 + G2 G3).

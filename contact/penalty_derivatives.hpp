@@ -32,4 +32,25 @@ double tet_polygon_penalty_derivatives(const ClipPolygon& poly, const std::array
                                        double eps, double min_area2, PairGradient& gradient,
                                        PairHessian* hessian);
 
+/// An obstacle's depth at a point (positive inside) with its gradient [-] and Hessian [1/m] there.
+struct DepthSample {
+  double value = 0;
+  Vec3 gradient = Vec3::Zero();
+  Mat3 hessian = Mat3::Zero();
+};
+
+using TriangleGradient = Eigen::Matrix<double, 9, 1>;
+using TriangleHessian = Eigen::Matrix<double, 9, 9>;
+
+/// W = field_polygon_penalty(poly, Q, G, eps, min_area2) (penalty.hpp) for a triangle Q in an
+/// obstacle's depth field, G_i = depth[i].value, returned with its gradient over the 9 corner
+/// coordinates and, where `hessian` is not null, its Hessian. The corner depths follow the field
+/// (depth[i] gives its derivatives at Q_i), and so do the crossings where the depth is zero: the
+/// staged chain rule of tet_polygon_penalty_derivatives with the field's depths in place of the
+/// tet's.
+double field_polygon_penalty_derivatives(const ClipPolygon& poly, const std::array<Vec3, 3>& Q,
+                                         const std::array<DepthSample, 3>& depth, double eps,
+                                         double min_area2, TriangleGradient& gradient,
+                                         TriangleHessian* hessian);
+
 }  // namespace depthfem

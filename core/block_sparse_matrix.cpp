@@ -50,6 +50,25 @@ Index BlockSparseMatrix::block_index(Index i, Index j) const {
   return static_cast<Index>(it - col_.begin());
 }
 
+std::vector<Index> BlockSparseMatrix::clique_block_indices(
+    const Eigen::Ref<const Eigen::Matrix<Index, Eigen::Dynamic, Eigen::Dynamic>>& cliques) const {
+  const Index rows = static_cast<Index>(cliques.rows()), K = static_cast<Index>(cliques.cols());
+  std::vector<Index> off(static_cast<size_t>(rows) * K * K);
+  std::atomic<bool> missing{false};
+  tbb::parallel_for(
+      tbb::blocked_range<Index>(0, rows, 4096), [&](const tbb::blocked_range<Index>& r) {
+        for (Index e = r.begin(); e < r.end() && !missing.load(std::memory_order_relaxed); ++e)
+          for (Index a = 0; a < K; ++a)
+            for (Index b = 0; b < K; ++b) {
+              const Index k = block_index(cliques(e, a), cliques(e, b));
+              if (k < 0) missing = true;
+              off[(static_cast<size_t>(e) * K + a) * K + b] = k;
+            }
+      });
+  if (missing) off.clear();
+  return off;
+}
+
 void BlockSparseMatrix::add_scaled(const BlockSparseMatrix& B, double s) {
   if (B.col_ != col_ || B.row_begin_ != row_begin_)
     throw std::logic_error("add_scaled: the patterns differ");

@@ -60,6 +60,11 @@ class BlockSparseMatrix {
   Index num_blocks() const { return static_cast<Index>(col_.size()); }
   /// Index of block (i, j); -1 when nodes i and j are not coupled.
   Index block_index(Index i, Index j) const;
+  /// Block indices of the node pairs of every row of `cliques` (#rows x K node indices): (a, b) of
+  /// row r at K K r + K a + b; empty as soon as some pair of nodes is found not coupled (the
+  /// search stops there). TBB-parallel over rows.
+  std::vector<Index> clique_block_indices(
+      const Eigen::Ref<const Eigen::Matrix<Index, Eigen::Dynamic, Eigen::Dynamic>>& cliques) const;
   /// Blocks of row node i span [row_begin(i), row_begin(i + 1)).
   Index row_begin(Index i) const { return row_begin_[i]; }
   /// Column node of block k.
@@ -79,6 +84,13 @@ class BlockSparseMatrix {
     double* v = values_.data() + 9 * k;
     for (int c = 0; c < 3; ++c)
       for (int d = 0; d < 3; ++d) v[3 * c + d] += B(c, d);
+  }
+
+  /// Adds the K x K blocks of a dense 3K x 3K matrix B (node-major) to blocks off[K a + b].
+  template <int K, class Dense>
+  void add_blocks(const Index* off, const Dense& B) {
+    for (int a = 0; a < K; ++a)
+      for (int b = 0; b < K; ++b) add_block(off[K * a + b], B.template block<3, 3>(3 * a, 3 * b));
   }
 
   /// A += s B for a matrix B with the same pattern.

@@ -1,6 +1,7 @@
 #include "core/element_partition.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cstdint>
 #include <numeric>
 
@@ -48,27 +49,37 @@ ElementPartition partition_elements(
   std::stable_sort(sorted.begin(), sorted.end(),
                    [&](Index a, Index b) { return code[a] < code[b]; });
 
-  // Greedy chunk coloring: a chunk takes the smallest color not yet used at any of its nodes.
+  // Greedy chunk coloring: a chunk takes the smallest color not yet used at any of its nodes. The
+  // colors used at a node are a bit set of `words` 64-bit words per node, widened when needed.
   const Index num_chunks = (n + chunk_size - 1) / chunk_size;
-  std::vector<std::vector<Index>> node_colors(static_cast<size_t>(num_nodes));
+  size_t words = 1;
+  std::vector<std::uint64_t> used(static_cast<size_t>(num_nodes) * words, 0);
+  std::vector<std::uint64_t> taken(words);
   std::vector<Index> chunk_color(static_cast<size_t>(num_chunks));
   Index num_colors = 0;
-  std::vector<char> taken;
   for (Index k = 0; k < num_chunks; ++k) {
     const Index begin = k * chunk_size, end = std::min(n, begin + chunk_size);
-    taken.assign(static_cast<size_t>(num_colors) + 1, 0);
+    std::fill(taken.begin(), taken.end(), 0);
     for (Index p = begin; p < end; ++p)
       for (Eigen::Index a = 0; a < elements.cols(); ++a)
-        for (Index c : node_colors[elements(sorted[p], a)]) taken[c] = 1;
-    const Index color =
-        static_cast<Index>(std::find(taken.begin(), taken.end(), 0) - taken.begin());
+        for (size_t w = 0; w < words; ++w) taken[w] |= used[elements(sorted[p], a) * words + w];
+    size_t w = 0;
+    while (w < words && taken[w] == ~std::uint64_t{0}) ++w;
+    if (w == words) {  // every color in use at this chunk's nodes: one more word per node
+      std::vector<std::uint64_t> wider(static_cast<size_t>(num_nodes) * (words + 1), 0);
+      for (Index v = 0; v < num_nodes; ++v)
+        std::copy_n(used.begin() + v * words, words, wider.begin() + v * (words + 1));
+      used.swap(wider);
+      taken.push_back(0);
+      ++words;
+    }
+    const Index color = static_cast<Index>(64 * w + std::countr_one(taken[w]));
     chunk_color[k] = color;
     num_colors = std::max(num_colors, color + 1);
+    const std::uint64_t bit = std::uint64_t{1} << (color % 64);
     for (Index p = begin; p < end; ++p)
-      for (Eigen::Index a = 0; a < elements.cols(); ++a) {
-        std::vector<Index>& used = node_colors[elements(sorted[p], a)];
-        if (std::find(used.begin(), used.end(), color) == used.end()) used.push_back(color);
-      }
+      for (Eigen::Index a = 0; a < elements.cols(); ++a)
+        used[elements(sorted[p], a) * words + color / 64] |= bit;
   }
 
   // Lay the chunks out color by color, keeping their order within a color.

@@ -2,6 +2,10 @@
 /// Partition of elements into spatially compact chunks, the chunks colored so that chunks of one
 /// color share no node.
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <functional>
 #include <vector>
 
 #include "core/types.hpp"
@@ -28,5 +32,25 @@ struct ElementPartition {
 ElementPartition partition_elements(
     const Eigen::Ref<const Eigen::Matrix<Index, Eigen::Dynamic, Eigen::Dynamic>>& elements,
     Index num_nodes, const Points& centroids, Index chunk_size = 1024);
+
+/// Runs chunk(k) for every chunk k, colors one after the other (`color_begin`: #colors + 1 chunk
+/// offsets) and the chunks of one color concurrently: they share no node, so they may add into
+/// node data (gradients, matrix blocks) without races, each in its own order. Returns the sum of
+/// what the calls return (T: double, a fixed-size Eigen vector), added in a fixed tree, one chunk
+/// per leaf, so that results do not depend on the number of threads.
+template <class T, class ChunkFn>
+T run_by_color(const std::vector<Index>& color_begin, const T& zero, ChunkFn chunk) {
+  T total = zero;
+  for (size_t c = 0; c + 1 < color_begin.size(); ++c) {
+    total += tbb::parallel_deterministic_reduce(
+        tbb::blocked_range<Index>(color_begin[c], color_begin[c + 1], 1), zero,
+        [&](const tbb::blocked_range<Index>& chunks, T acc) {
+          for (Index k = chunks.begin(); k < chunks.end(); ++k) acc += chunk(k);
+          return acc;
+        },
+        std::plus<T>());
+  }
+  return total;
+}
 
 }  // namespace depthfem

@@ -8,68 +8,102 @@
 #include <limits>
 #include <stdexcept>
 
+#include "core/element_partition.hpp"
 #include "core/error.hpp"
 #include "integrators/inversion_step.hpp"
+#include "integrators/tet_inputs.hpp"
 #include "integrators/tet_kernel.hpp"
 
 namespace depthfem {
 
 namespace {
 
-inline Mat3 edge_matrix(const Points& x, const TetIndices& nodes, Index e) {
-  const Index n0 = nodes(e, 0);
-  Mat3 Ds;
-  for (int a = 0; a < 3; ++a) {
-    const Index na = nodes(e, a + 1);
-    Ds.col(a) = Vec3(x(na, 0) - x(n0, 0), x(na, 1) - x(n0, 1), x(na, 2) - x(n0, 2));
+// Adds the lanes of a batch at rows e .. e + W in lane order: energy into `energy`, gradient
+// through the node indices.
+template <int kOrder, class V>
+void add_energy_gradient(const TetBatch<V>& t, const TetBlock& b, Index e, double& energy,
+                         VectorX* g) {
+  for (int l = 0; l < V::kWidth; ++l) {
+    energy += t.energy[l];
+    if constexpr (kOrder >= 1) {
+      for (int a = 0; a < 4; ++a) {
+        double* ga = g->data() + 3 * b.nodes(e + l, a);
+        for (int c = 0; c < 3; ++c) ga[c] += t.gradient[a][c][l];
+      }
+    }
   }
-  return Ds;
 }
 
-inline Vec3 fiber_of(const TetBlock& b, Index e) {
-  return b.fiber.rows() ? Vec3(b.fiber.row(e).transpose()) : Vec3::UnitX();
+// Adds the 16 Hessian blocks of each tet of a batch through its scatter offsets (16 per tet).
+// A block's first eight entries are transposed from lanes to rows, so that each tet adds them
+// with one vector load, add and store; the ninth is added alone.
+template <class V>
+void add_hessian(const TetBatch<V>& t, const Index* off, BlockSparseMatrix& H) {
+  constexpr int W = V::kWidth;
+  for (int blk = 0; blk < 16; ++blk) {
+    const int a = blk / 4, c = blk % 4;
+    std::array<V, 8> rows;
+    for (int k = 0; k < 8; ++k) rows[k] = t.hessian[3 * a + k / 3][3 * c + k % 3];
+    for (int q = 0; q < 8; q += W) transpose(rows.data() + q);
+    const V& last = t.hessian[3 * a + 2][3 * c + 2];
+    for (int l = 0; l < W; ++l) {
+      double* v = H.block(off[16 * l + blk]).data();
+      for (int q = 0; q < 8; q += W) (V::load(v + q) + rows[q + l]).store(v + q);
+      v[8] += last[l];
+    }
+  }
+}
+
+// Asks for the cache lines of the blocks that the next batch (16 W offsets) adds to: the matrix
+// is far larger than the caches and its blocks are scattered, so each first touch would wait.
+void prefetch_blocks(const Index* off, int count, BlockSparseMatrix& H) {
+  for (int k = 0; k < count; ++k) {
+    const double* v = H.block(off[k]).data();  // 72 bytes: at most two cache lines
+    __builtin_prefetch(v, 1);
+    __builtin_prefetch(v + 8, 1);
+  }
 }
 
 // Walks rows [begin, end) of a block in order: energy sum, and scatter of gradient / Hessian.
+// Whole batches of kLanes rows go through the batched kernel, the rows left over through the
+// scalar one. Each tet's 12x12 Hessian is complete between kernel and scatter (batch.hessian_of(l)
+// and set_hessian_of, local.hessian): a per-element modification such as a projection to positive
+// semi-definite belongs there.
 template <int kOrder, class M>
 double run_rows(const M& m, const TetBlock& b, const Index* scatter, const Points& x, Index begin,
                 Index end, VectorX* g, BlockSparseMatrix* H) {
-  TetLocal local;
+  using V = Lanes<kLanes>;
+  TetBatch<V> batch;
   double energy = 0;
-  for (Index e = begin; e < end; ++e) {
-    tet_local<kOrder>(m, edge_matrix(x, b.nodes, e), b.dm_inv(e), b.volume(e), fiber_of(b, e),
-                      local);
+  Index e = begin;
+  for (; e + kLanes <= end; e += kLanes) {
+    if constexpr (kOrder >= 2) {
+      if (e + 2 * kLanes <= end) prefetch_blocks(scatter + 16 * (e + kLanes), 16 * kLanes, *H);
+    }
+    tet_batch<kOrder>(m, tet_batch_input<V, M::kUsesFiber>(b, x, e), batch);
+    add_energy_gradient<kOrder>(batch, b, e, energy, g);
+    if constexpr (kOrder >= 2) add_hessian(batch, scatter + 16 * e, *H);
+  }
+  TetLocal local;
+  for (; e < end; ++e) {
+    const TetInput t = tet_input(b, x, e);
+    tet_local<kOrder>(m, t.Ds, t.D, t.volume, t.fiber, local);
     energy += local.energy;
     if constexpr (kOrder >= 1) {
       for (int a = 0; a < 4; ++a) g->segment<3>(3 * b.nodes(e, a)) += local.gradient.col(a);
     }
-    if constexpr (kOrder >= 2) {
-      const Index* off = scatter + 16 * e;
-      for (int a = 0; a < 4; ++a)
-        for (int c = 0; c < 4; ++c)
-          H->add_block(off[4 * a + c], local.hessian.block<3, 3>(3 * a, 3 * c));
-    }
+    if constexpr (kOrder >= 2) H->add_blocks<4>(scatter + 16 * e, local.hessian);
   }
   return energy;
 }
 
-// Colors in order; the chunks of one color share no node and run concurrently, each walked in
-// order. Chunk energies are summed in a fixed tree (deterministic reduce, one chunk per leaf).
+// The chunks of a block color by color (run_by_color: deterministic for any number of threads).
 template <int kOrder, class M>
 double run_group(const M& m, const TetBlock& b, const Index* scatter, const Points& x, VectorX* g,
                  BlockSparseMatrix* H) {
-  double total = 0;
-  for (Index c = 0; c < b.num_colors(); ++c) {
-    total += tbb::parallel_deterministic_reduce(
-        tbb::blocked_range<Index>(b.color_begin[c], b.color_begin[c + 1], 1), 0.0,
-        [&](const tbb::blocked_range<Index>& chunks, double acc) {
-          for (Index k = chunks.begin(); k < chunks.end(); ++k)
-            acc += run_rows<kOrder>(m, b, scatter, x, b.chunk_begin[k], b.chunk_begin[k + 1], g, H);
-          return acc;
-        },
-        std::plus<double>());
-  }
-  return total;
+  return run_by_color(b.color_begin, 0.0, [&](Index k) {
+    return run_rows<kOrder>(m, b, scatter, x, b.chunk_begin[k], b.chunk_begin[k + 1], g, H);
+  });
 }
 
 }  // namespace
@@ -108,15 +142,9 @@ void Elasticity::add_couplings(SparsityBuilder& builder) const {
 
 void Elasticity::bind(const BlockSparseMatrix& H) {
   for (Group& grp : groups_) {
-    const TetBlock& b = grp.block;
-    grp.scatter.resize(16 * static_cast<size_t>(b.size()));
-    for (Index e = 0; e < b.size(); ++e)
-      for (int a = 0; a < 4; ++a)
-        for (int c = 0; c < 4; ++c) {
-          const Index off = H.block_index(b.nodes(e, a), b.nodes(e, c));
-          if (off < 0) throw std::logic_error("elasticity: Hessian pattern lacks a tet coupling");
-          grp.scatter[16 * e + 4 * a + c] = off;
-        }
+    grp.scatter = H.clique_block_indices(grp.block.nodes);
+    if (grp.scatter.size() != 16 * static_cast<size_t>(grp.block.size()))
+      throw std::logic_error("elasticity: Hessian pattern lacks a tet coupling");
   }
 }
 
@@ -142,17 +170,17 @@ double Elasticity::max_step(const Points& x, const Points& dx) const {
   double alpha = std::numeric_limits<double>::infinity();
   for (const Group& grp : groups_) {
     const TetBlock& b = grp.block;
-    alpha = std::min(alpha, tbb::parallel_reduce(
-                                tbb::blocked_range<Index>(0, b.size(), 1024), alpha,
-                                [&](const tbb::blocked_range<Index>& r, double acc) {
-                                  for (Index e = r.begin(); e < r.end(); ++e) {
-                                    acc = std::min(
-                                        acc, inversion_step(edge_matrix(x, b.nodes, e),
-                                                            edge_matrix(dx, b.nodes, e), kLimit));
-                                  }
-                                  return acc;
-                                },
-                                [](double a, double c) { return std::min(a, c); }));
+    alpha =
+        std::min(alpha, tbb::parallel_reduce(
+                            tbb::blocked_range<Index>(0, b.size(), 1024), alpha,
+                            [&](const tbb::blocked_range<Index>& r, double acc) {
+                              for (Index e = r.begin(); e < r.end(); ++e) {
+                                acc = std::min(acc, inversion_step(edge_vectors(b, x, e),
+                                                                   edge_vectors(b, dx, e), kLimit));
+                              }
+                              return acc;
+                            },
+                            [](double a, double c) { return std::min(a, c); }));
   }
   return alpha;
 }
@@ -161,7 +189,7 @@ Index Elasticity::first_inverted(const Points& x) const {
   for (const Group& grp : groups_) {
     const TetBlock& b = grp.block;
     for (Index e = 0; e < b.size(); ++e)
-      if (!(edge_matrix(x, b.nodes, e).determinant() > 0)) return b.tet(e);
+      if (!(edge_vectors(b, x, e).determinant() > 0)) return b.tet(e);
   }
   return -1;
 }

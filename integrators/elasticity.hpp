@@ -17,7 +17,9 @@ struct ElasticGroup {
 };
 
 /// Sum over groups of V psi(F) per tet. Each group's data is a color-ordered TetBlock, and the
-/// kernel is instantiated per material type: one std::visit per group, none per element.
+/// kernel is instantiated per material type: one std::visit per group, none per element. A chunk
+/// goes through the batched kernel (batched_tet_kernel.hpp) kLanes rows at a time, the rows left
+/// over through the scalar one; the Hessian blocks are added through indices found in bind().
 /// Results are bitwise identical for any number of threads: elements of one color share no
 /// node, colors run in a fixed order, and energies are summed with a fixed chunking.
 class Elasticity final : public ForceModule {

@@ -1,11 +1,13 @@
 #pragma once
-/// The per-tet hyperelastic kernel: energy, gradient and 12x12 Hessian of one linear tet.
+/// The per-tet hyperelastic kernel: energy, gradient and 12x12 Hessian of one linear tet. It is the
+/// reference for the batched kernel (batched_tet_kernel.hpp) and runs the rows a batch leaves over.
 ///
 /// With Ds = [x1-x0, x2-x0, x3-x0] and D = Dm^-1, F = Ds D, so dF_ij / dDs_ka = delta_ik D_aj.
 /// Energy V psi(F); gradient on nodes 1..3 is V P D^T (column a), node 0 takes minus their sum.
 /// Hessian on nodes 1..3: K = V A dP/dF A^T with A = D (x) I3 (Kronecker, on column-major vec);
 /// rows and columns of node 0 are minus the sums over the other nodes (translation invariance).
 
+#include "core/types.hpp"
 #include "materials/hyperelastic.hpp"
 
 namespace depthfem {
@@ -20,13 +22,25 @@ struct TetLocal {
   Mat12 hessian;
 };
 
+/// F = Ds D for column-major 3x3 matrices given as 9 values (doubles or lanes), with explicit
+/// multiply-adds. The scalar and the batched kernel share it so that they round F alike:
+/// J = det F is ill-conditioned near inversion, and follows any difference in F's rounding.
+template <class S>
+void deformation_gradient(const S* Ds, const S* D, S* F) {
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i)
+      F[3 * j + i] = multiply_add(Ds[6 + i], D[3 * j + 2],
+                                  multiply_add(Ds[3 + i], D[3 * j + 1], Ds[i] * D[3 * j]));
+}
+
 /// Evaluates one tet: energy (kOrder 0), + gradient (1), + Hessian (2). `Ds` holds the current
 /// edge vectors, `D` = Dm^-1, `volume` the rest volume, `f` the unit fiber direction.
 /// For det F <= 0 the energy is +infinity and gradient / Hessian are not meaningful.
 template <int kOrder, Material M>
 inline void tet_local(const M& m, const Mat3& Ds, const Mat3& D, double volume, const Vec3& f,
                       TetLocal& out) {
-  const Mat3 F = Ds * D;
+  Mat3 F;
+  deformation_gradient(Ds.data(), D.data(), F.data());
   const StressState s = evaluate_stress<kOrder>(m, F, f);
   out.energy = volume * s.psi;
   if constexpr (kOrder >= 1) {

@@ -29,13 +29,14 @@ struct FiberReinforced {
     if (!(beta > 0)) throw std::invalid_argument("fiber: beta must be > 0");
   }
 
-  template <int kOrder>
-  InvariantDerivatives evaluate(const Invariants& inv) const {
-    InvariantDerivatives e = base.template evaluate<kOrder>(inv);
-    const double ex = std::exp(beta * (inv.I4 - 1));
+  template <int kOrder, class S>
+  InvariantDerivatives<S> evaluate(const Invariants<S>& inv) const {
+    using std::exp;
+    InvariantDerivatives<S> e = base.template evaluate<kOrder>(inv);
+    const S ex = exp(beta * (inv.I4 - 1));
     e.psi += alpha * (ex - 1) - alpha * beta * (inv.I4 - 1);
-    if constexpr (kOrder >= 1) e.d(kI4) = alpha * beta * (ex - 1);
-    if constexpr (kOrder >= 2) e.d2(kI4, kI4) = alpha * beta * beta * ex;
+    if constexpr (kOrder >= 1) e.d[kI4] = alpha * beta * (ex - 1);
+    if constexpr (kOrder >= 2) e.d2[kI4][kI4] = alpha * beta * beta * ex;
     return e;
   }
 };

@@ -19,10 +19,10 @@ namespace depthfem {
 
 /// The interface every material model satisfies.
 template <class M>
-concept Material = requires(const M m, const Invariants& inv) {
+concept Material = requires(const M m, const Invariants<>& inv) {
   { M::kUsesI2 } -> std::convertible_to<bool>;
   { M::kUsesFiber } -> std::convertible_to<bool>;
-  { m.template evaluate<2>(inv) } -> std::same_as<InvariantDerivatives>;
+  { m.template evaluate<2>(inv) } -> std::same_as<InvariantDerivatives<>>;
 };
 
 /// Energy density [J/m^3], first Piola-Kirchhoff stress [Pa] and its derivative [Pa] at one F.
@@ -52,12 +52,12 @@ inline void add_cross_block(Mat9& H, int r, int c, double s, const Eigen::Vector
 template <int kOrder, Material M>
 StressState evaluate_stress(const M& m, const Eigen::Matrix3d& F, const Eigen::Vector3d& f) {
   StressState s;
-  const Invariants inv = invariants(F, f);
+  const Invariants<> inv = invariants(F, f);
   if (!(inv.J > 0)) {
     s.psi = std::numeric_limits<double>::infinity();
     return s;
   }
-  const InvariantDerivatives e = m.template evaluate<kOrder>(inv);
+  const InvariantDerivatives<> e = m.template evaluate<kOrder>(inv);
   s.psi = e.psi;
   if constexpr (kOrder == 0) return s;
 
@@ -71,9 +71,9 @@ StressState evaluate_stress(const M& m, const Eigen::Matrix3d& F, const Eigen::V
   const Eigen::Vector3d Ff = F * f;
   if constexpr (M::kUsesFiber) g[kI4] = 2.0 * Ff * f.transpose();
 
-  s.P = e.d(kI1) * g[kI1] + e.d(kJ) * g[kJ];
-  if constexpr (M::kUsesI2) s.P += e.d(kI2) * g[kI2];
-  if constexpr (M::kUsesFiber) s.P += e.d(kI4) * g[kI4];
+  s.P = e.d[kI1] * g[kI1] + e.d[kJ] * g[kJ];
+  if constexpr (M::kUsesI2) s.P += e.d[kI2] * g[kI2];
+  if constexpr (M::kUsesFiber) s.P += e.d[kI4] * g[kI4];
   if constexpr (kOrder == 1) return s;
 
   // Second derivatives, written per 3x3 block (j, l) of dP/dF, which couples column j of P with
@@ -86,23 +86,23 @@ StressState evaluate_stress(const M& m, const Eigen::Matrix3d& F, const Eigen::V
   const Eigen::Matrix3d C = F.transpose() * F;
   for (int j = 0; j < 3; ++j) {
     for (int l = 0; l < 3; ++l) {
-      double diag = (j == l) ? 2.0 * e.d(kI1) : 0.0;
-      if constexpr (M::kUsesI2) diag += 2.0 * e.d(kI2) * ((j == l ? inv.I1 : 0.0) - C(l, j));
-      if constexpr (M::kUsesFiber) diag += 2.0 * e.d(kI4) * f(j) * f(l);
+      double diag = (j == l) ? 2.0 * e.d[kI1] : 0.0;
+      if constexpr (M::kUsesI2) diag += 2.0 * e.d[kI2] * ((j == l ? inv.I1 : 0.0) - C(l, j));
+      if constexpr (M::kUsesFiber) diag += 2.0 * e.d[kI4] * f(j) * f(l);
       auto block = H.block<3, 3>(3 * j, 3 * l);
       block.diagonal().array() += diag;
       if constexpr (M::kUsesI2) {
-        block += 2.0 * e.d(kI2) *
+        block += 2.0 * e.d[kI2] *
                  (2.0 * F.col(j) * F.col(l).transpose() - F.col(l) * F.col(j).transpose());
-        if (j == l) block -= 2.0 * e.d(kI2) * B;
+        if (j == l) block -= 2.0 * e.d[kI2] * B;
       }
     }
   }
   // d2J: for j != l let n be the third index and eps = eps_jln; block = -eps psi_J [F_n]x.
   for (int j = 0; j < 3; ++j) {
     const int l = (j + 1) % 3, n = (j + 2) % 3;  // (j, l, n) is an even permutation: eps = +1
-    detail::add_cross_block(H, 3 * j, 3 * l, -e.d(kJ), F.col(n));
-    detail::add_cross_block(H, 3 * l, 3 * j, e.d(kJ), F.col(n));
+    detail::add_cross_block(H, 3 * j, 3 * l, -e.d[kJ], F.col(n));
+    detail::add_cross_block(H, 3 * l, 3 * j, e.d[kJ], F.col(n));
   }
   // Rank-one terms psi_xy vec(g_x) vec(g_y)^T over the invariants the material uses.
   constexpr int kCount = 4;
@@ -111,7 +111,7 @@ StressState evaluate_stress(const M& m, const Eigen::Matrix3d& F, const Eigen::V
     const Eigen::Map<const Vec9> gx(g[x].data());
     for (int y = x; y < kCount; ++y) {
       if ((y == kI2 && !M::kUsesI2) || (y == kI4 && !M::kUsesFiber)) continue;
-      const double w = e.d2(x, y);
+      const double w = e.d2[x][y];
       if (w == 0.0) continue;
       const Eigen::Map<const Vec9> gy(g[y].data());
       if (x == y) {

@@ -29,13 +29,13 @@ struct MooneyRivlin {
   /// Throws std::invalid_argument unless C1, C2 >= 0, C1 + C2 > 0 and the rest state is stable.
   void validate() const;
 
-  template <int kOrder>
-  InvariantDerivatives evaluate(const Invariants& inv) const {
-    InvariantDerivatives e;
+  template <int kOrder, class S>
+  InvariantDerivatives<S> evaluate(const Invariants<S>& inv) const {
+    InvariantDerivatives<S> e;
     e.psi = C1 * (inv.I1 - 3) + C2 * (inv.I2 - 3);
     if constexpr (kOrder >= 1) {
-      e.d(kI1) = C1;
-      e.d(kI2) = C2;
+      e.d[kI1] = C1;
+      e.d[kI2] = C2;
     }
     add_volumetric_barrier<kOrder>(e, inv.J, a, C1 + 2.0 * C2 + a);
     return e;

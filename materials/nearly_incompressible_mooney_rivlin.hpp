@@ -23,23 +23,24 @@ struct NearlyIncompressibleMooneyRivlin {
   /// Throws std::invalid_argument unless C1, C2 >= 0, C1 + C2 > 0 and kappa > 0.
   void validate() const;
 
-  template <int kOrder>
-  InvariantDerivatives evaluate(const Invariants& inv) const {
-    const double J = inv.J;
-    const double j23 = std::pow(J, -2.0 / 3.0), j43 = j23 * j23;
-    InvariantDerivatives e;
+  template <int kOrder, class S>
+  InvariantDerivatives<S> evaluate(const Invariants<S>& inv) const {
+    using std::log, std::pow;
+    const S J = inv.J;
+    const S j23 = pow(J, -2.0 / 3.0), j43 = j23 * j23;
+    InvariantDerivatives<S> e;
     e.psi = C1 * (j23 * inv.I1 - 3) + C2 * (j43 * inv.I2 - 3) +
-            0.5 * kappa * (0.5 * (J * J - 1) - std::log(J));
+            0.5 * kappa * (0.5 * (J * J - 1) - log(J));
     if constexpr (kOrder >= 1) {
-      e.d(kI1) = C1 * j23;
-      e.d(kI2) = C2 * j43;
-      e.d(kJ) = (-2.0 / 3.0 * C1 * j23 * inv.I1 - 4.0 / 3.0 * C2 * j43 * inv.I2) / J +
+      e.d[kI1] = C1 * j23;
+      e.d[kI2] = C2 * j43;
+      e.d[kJ] = (-2.0 / 3.0 * C1 * j23 * inv.I1 - 4.0 / 3.0 * C2 * j43 * inv.I2) / J +
                 0.5 * kappa * (J - 1 / J);
     }
     if constexpr (kOrder >= 2) {
-      e.d2(kI1, kJ) = e.d2(kJ, kI1) = -2.0 / 3.0 * C1 * j23 / J;
-      e.d2(kI2, kJ) = e.d2(kJ, kI2) = -4.0 / 3.0 * C2 * j43 / J;
-      e.d2(kJ, kJ) = (10.0 / 9.0 * C1 * j23 * inv.I1 + 28.0 / 9.0 * C2 * j43 * inv.I2) / (J * J) +
+      e.d2[kI1][kJ] = e.d2[kJ][kI1] = -2.0 / 3.0 * C1 * j23 / J;
+      e.d2[kI2][kJ] = e.d2[kJ][kI2] = -4.0 / 3.0 * C2 * j43 / J;
+      e.d2[kJ][kJ] = (10.0 / 9.0 * C1 * j23 * inv.I1 + 28.0 / 9.0 * C2 * j43 * inv.I2) / (J * J) +
                      0.5 * kappa * (1 + 1 / (J * J));
     }
     return e;

@@ -22,16 +22,17 @@ struct NeoHookean {
   /// Throws std::invalid_argument unless mu > 0 and the bulk modulus lambda + 2 mu / 3 > 0.
   void validate() const;
 
-  template <int kOrder>
-  InvariantDerivatives evaluate(const Invariants& inv) const {
-    const double lnJ = std::log(inv.J);
-    InvariantDerivatives e;
+  template <int kOrder, class S>
+  InvariantDerivatives<S> evaluate(const Invariants<S>& inv) const {
+    using std::log;
+    const S lnJ = log(inv.J);
+    InvariantDerivatives<S> e;
     e.psi = 0.5 * mu * (inv.I1 - 3) - mu * lnJ + 0.5 * lambda * lnJ * lnJ;
     if constexpr (kOrder >= 1) {
-      e.d(kI1) = 0.5 * mu;
-      e.d(kJ) = (lambda * lnJ - mu) / inv.J;
+      e.d[kI1] = 0.5 * mu;
+      e.d[kJ] = (lambda * lnJ - mu) / inv.J;
     }
-    if constexpr (kOrder >= 2) e.d2(kJ, kJ) = (mu + lambda * (1 - lnJ)) / (inv.J * inv.J);
+    if constexpr (kOrder >= 2) e.d2[kJ][kJ] = (mu + lambda * (1 - lnJ)) / (inv.J * inv.J);
     return e;
   }
 };

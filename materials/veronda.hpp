@@ -34,16 +34,17 @@ struct Veronda {
   /// Throws std::invalid_argument unless alpha > 0, beta >= 0 and the rest state is stable.
   void validate() const;
 
-  template <int kOrder>
-  InvariantDerivatives evaluate(const Invariants& inv) const {
-    const double ex = std::exp(inv.I1 - 3);
-    InvariantDerivatives e;
+  template <int kOrder, class S>
+  InvariantDerivatives<S> evaluate(const Invariants<S>& inv) const {
+    using std::exp;
+    const S ex = exp(inv.I1 - 3);
+    InvariantDerivatives<S> e;
     e.psi = 2.0 * alpha * (ex - 1) + alpha * beta * (inv.I2 - 3);
     if constexpr (kOrder >= 1) {
-      e.d(kI1) = 2.0 * alpha * ex;
-      e.d(kI2) = alpha * beta;
+      e.d[kI1] = 2.0 * alpha * ex;
+      e.d[kI2] = alpha * beta;
     }
-    if constexpr (kOrder >= 2) e.d2(kI1, kI1) = 2.0 * alpha * ex;
+    if constexpr (kOrder >= 2) e.d2[kI1][kI1] = 2.0 * alpha * ex;
     add_volumetric_barrier<kOrder>(e, inv.J, a, a + 2.0 * alpha + 2.0 * alpha * beta);
     return e;
   }

@@ -1,9 +1,11 @@
 // Exact derivatives of the pair penalty: automatic differentiation (Dual2<21>) against finite
-// differences, and the staged chain rule against automatic differentiation, in every clip case.
+// differences, and the staged chain rule against automatic differentiation, in every clip case;
+// the same for a triangle in an obstacle's depth field (Dual2<9>).
 #include <gtest/gtest.h>
 
 #include <random>
 
+#include "contact/clip.hpp"
 #include "contact/penalty.hpp"
 #include "contact/penalty_derivatives.hpp"
 
@@ -205,6 +207,88 @@ TEST(StagedContactDerivatives, EqualAutomaticDifferentiationWithDegenerateFanTri
   EXPECT_GT(tested, 200);
   EXPECT_GT(skipped, 50) << "too few zero-area fan triangles";
   for (int k = 0; k < 3; ++k) EXPECT_GT(kinds[k], 20) << "vertex kind " << k << " not covered";
+}
+
+// ---- A triangle in an obstacle's depth field (field_polygon_penalty_derivatives).
+
+using Vec9 = Eigen::Matrix<double, 9, 1>;
+
+// A sphere of radius 1 about the origin: depth 1 - |q|, as ObstacleContact computes it.
+template <class S>
+S sphere_depth(const V3<S>& q) {
+  using std::sqrt;
+  return -sqrt(q.dot(q)) + 1.0;
+}
+DepthSample sphere_sample(const Vec3& q) {
+  const Vec3 m = q.normalized();
+  return {1 - q.norm(), -m, -(Mat3::Identity() - m * m.transpose()) / q.norm()};
+}
+
+// W of the triangle z in the sphere's field, clipped at z, with S = double or Dual2<9>.
+template <class S>
+S field_energy(const Vec9& z, ClipPolygon* out = nullptr) {
+  std::array<Vec3, 3> Q;
+  std::array<V3<S>, 3> Qv;
+  std::array<S, 3> G;
+  for (int b = 0; b < 3; ++b) {
+    Q[b] = z.segment<3>(3 * b);
+    Qv[b] = make_point<S>(Q[b], 3 * b);
+    G[b] = sphere_depth(Qv[b]);
+  }
+  const ClipPolygon poly =
+      clip_triangle_by_field(Q, {value_of(G[0]), value_of(G[1]), value_of(G[2])});
+  if (out) *out = poly;
+  return field_polygon_penalty(poly, Qv, G, kEps, 0.0);
+}
+
+// Triangles with corners near the unit sphere, so that one, two or three corners are inside:
+// the staged derivatives equal Dual2<9> through the same energy (1e-10 of the largest entry, as
+// for the tet pairs), and finite differences of the energy (gradient, 1e-6) and of the staged
+// gradient (Hessian, 1e-5), with the step and reasoning of MatchFiniteDifferencesInEveryClipCase.
+TEST(StagedObstacleDerivatives, EqualAutomaticDifferentiationAndFiniteDifferences) {
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> radius(0.85, 1.1), angle(-0.3, 0.3);
+  int tested = 0, inside_count[4] = {};
+  while (tested < 150) {
+    Vec9 z;
+    for (int b = 0; b < 3; ++b) {
+      const double th = angle(rng), ph = angle(rng);
+      z.segment<3>(3 * b) =
+          radius(rng) * Vec3(std::sin(th), std::sin(ph), std::cos(th) * std::cos(ph));
+    }
+    ClipPolygon poly;
+    const Dual2<9> W = field_energy<Dual2<9>>(z, &poly);
+    if (poly.size < 3 || W.v < 1e-12 * kEps) continue;
+    ++tested;
+    int inside = 0;
+    for (int b = 0; b < 3; ++b) inside += z.segment<3>(3 * b).norm() < 1;
+    ++inside_count[inside];
+    SCOPED_TRACE("configuration " + std::to_string(tested));
+    std::array<Vec3, 3> Q;
+    std::array<DepthSample, 3> depth;
+    for (int b = 0; b < 3; ++b) Q[b] = z.segment<3>(3 * b), depth[b] = sphere_sample(Q[b]);
+    TriangleGradient grad, grad_only;
+    TriangleHessian hess;
+    const double energy = field_polygon_penalty_derivatives(poly, Q, depth, kEps, 0.0, grad, &hess);
+    field_polygon_penalty_derivatives(poly, Q, depth, kEps, 0.0, grad_only, nullptr);
+    EXPECT_NEAR(energy, W.v, 1e-12 * W.v);
+    EXPECT_LE((grad - W.g).cwiseAbs().maxCoeff(), 1e-10 * W.g.cwiseAbs().maxCoeff());
+    EXPECT_LE((hess - W.h).cwiseAbs().maxCoeff(), 1e-10 * W.h.cwiseAbs().maxCoeff());
+    EXPECT_EQ((grad_only - grad).cwiseAbs().maxCoeff(), 0.0);
+    const double h = 1e-6;
+    Vec9 grad_fd;
+    TriangleHessian hess_fd;
+    for (int i = 0; i < 9; ++i) {
+      Vec9 zp = z, zm = z;
+      zp(i) += h;
+      zm(i) -= h;
+      grad_fd(i) = (field_energy<double>(zp) - field_energy<double>(zm)) / (2 * h);
+      hess_fd.col(i) = (field_energy<Dual2<9>>(zp).g - field_energy<Dual2<9>>(zm).g) / (2 * h);
+    }
+    EXPECT_LE((grad - grad_fd).cwiseAbs().maxCoeff(), 1e-6 * grad.cwiseAbs().maxCoeff());
+    EXPECT_LE((hess - hess_fd).cwiseAbs().maxCoeff(), 1e-5 * hess.cwiseAbs().maxCoeff());
+  }
+  for (int k = 1; k <= 3; ++k) EXPECT_GT(inside_count[k], 10) << k << " corners inside";
 }
 
 }  // namespace

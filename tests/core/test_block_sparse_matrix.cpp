@@ -1,6 +1,10 @@
-// Sparse pattern, scatter offsets and element coloring against dense / brute-force references.
+// Sparse pattern, scatter offsets, element coloring and the colored run against dense /
+// brute-force references.
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
+#include <atomic>
 #include <map>
 #include <random>
 #include <set>
@@ -12,14 +16,19 @@
 namespace depthfem {
 namespace {
 
-// The pattern of the tets of a mesh (every tet couples its four nodes).
-BlockSparseMatrix box_pattern(const TetMesh& m) {
+// The couplings of the tets of a mesh (every tet couples its four nodes).
+SparsityBuilder tet_couplings(const TetMesh& m) {
   SparsityBuilder builder(static_cast<Index>(m.X.rows()));
   for (Index t = 0; t < m.tets.rows(); ++t) {
     const Index v[4] = {m.tets(t, 0), m.tets(t, 1), m.tets(t, 2), m.tets(t, 3)};
     builder.add_clique(v);
   }
-  return BlockSparseMatrix(builder);
+  return builder;
+}
+
+// The pattern of those couplings.
+BlockSparseMatrix box_pattern(const TetMesh& m) {
+  return BlockSparseMatrix(tet_couplings(m));
 }
 
 TEST(BlockSparseMatrix, ScatteredBlocksEqualDenseAssembly) {
@@ -90,6 +99,35 @@ TEST(BlockSparseMatrix, EveryNewPatternGetsANewVersion) {
   EXPECT_EQ(copy.pattern_version(), A.pattern_version());
 }
 
+// The block indices of element cliques, found in bulk, are those of single look-ups, and adding a
+// dense element matrix through them adds it block by block.
+TEST(BlockSparseMatrix, CliqueBlockIndicesMatchLookUpsAndAddDenseMatrices) {
+  const TetMesh m = box_mesh({Vec3::Zero(), Vec3::Ones(), Eigen::Vector3i(3, 2, 2)});
+  const Index n = static_cast<Index>(m.X.rows());
+  const SparsityBuilder builder = tet_couplings(m);
+  BlockSparseMatrix A(builder), B(builder);
+  const std::vector<Index> off = A.clique_block_indices(m.tets);
+  ASSERT_EQ(off.size(), 16 * static_cast<size_t>(m.tets.rows()));
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (Index t = 0; t < m.tets.rows(); ++t) {
+    Eigen::Matrix<double, 12, 12> K;
+    for (Index k = 0; k < K.size(); ++k) K(k) = u(rng);
+    A.add_blocks<4>(off.data() + 16 * t, K);
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b) {
+        EXPECT_EQ(off[16 * t + 4 * a + b], B.block_index(m.tets(t, a), m.tets(t, b)));
+        B.add_block(B.block_index(m.tets(t, a), m.tets(t, b)), K.block<3, 3>(3 * a, 3 * b));
+      }
+  }
+  EXPECT_EQ((Eigen::MatrixXd(A.to_sparse()) - Eigen::MatrixXd(B.to_sparse())).cwiseAbs().maxCoeff(),
+            0.0);
+  // A clique of uncoupled nodes has no block indices at all.
+  Eigen::Matrix<Index, 1, 2> far;
+  far << 0, n - 1;
+  EXPECT_TRUE(A.clique_block_indices(far).empty());
+}
+
 TEST(ElementPartition, ChunksOfAColorShareNoNodeAndEveryElementAppearsOnce) {
   const TetMesh m = box_mesh({Vec3::Zero(), Vec3::Ones(), Eigen::Vector3i(6, 5, 4)});
   Points centroids(m.tets.rows(), 3);
@@ -119,6 +157,53 @@ TEST(ElementPartition, ChunksOfAColorShareNoNodeAndEveryElementAppearsOnce) {
   // Compact chunks need few colors (a chunk meets a bounded number of neighbours).
   EXPECT_LE(p.num_colors(), 32);
   EXPECT_GE(p.num_colors(), 2);
+}
+
+// Chunks that all share a node need a color each: 100 of them, more than one 64-bit word of
+// colors per node holds.
+TEST(ElementPartition, ChunksSharingANodeGetAColorEach) {
+  const Index n = 100;
+  Eigen::Matrix<Index, Eigen::Dynamic, Eigen::Dynamic> elements(n, 2);
+  Points centroids(n, 3);
+  for (Index e = 0; e < n; ++e) {
+    elements.row(e) << 0, e + 1;
+    centroids.row(e) << e, 0, 0;
+  }
+  const ElementPartition p = partition_elements(elements, n + 1, centroids, 1);
+  EXPECT_EQ(p.num_colors(), n);
+  for (Index c = 0; c < p.num_colors(); ++c) EXPECT_EQ(p.color_begin[c + 1] - p.color_begin[c], 1);
+}
+
+// run_by_color calls every chunk once, starts a chunk only after every chunk of the earlier colors
+// has finished, and returns the same sum (bit for bit) on any number of threads.
+TEST(ElementPartition, RunByColorVisitsChunksOnceColorAfterColor) {
+  const std::vector<Index> color_begin = {0, 5, 6, 40, 41, 90};
+  const int colors = static_cast<int>(color_begin.size()) - 1, chunks = 90;
+  std::vector<int> color_of(chunks);
+  for (int c = 0; c < colors; ++c)
+    for (Index k = color_begin[c]; k < color_begin[c + 1]; ++k) color_of[k] = c;
+  const auto run = [&](int threads) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    tbb::task_arena arena(threads);
+    std::vector<std::atomic<int>> calls(chunks), finished(colors);
+    double sum = 0;
+    arena.execute([&] {
+      sum = run_by_color(color_begin, 0.0, [&](Index k) {
+        ++calls[k];
+        for (int c = 0; c < color_of[k]; ++c)
+          EXPECT_EQ(finished[c].load(), color_begin[c + 1] - color_begin[c]) << "chunk " << k;
+        double v = 0;
+        for (int i = 1; i <= 1000; ++i) v += 1.0 / (i + k);  // inexact: a new order would show
+        ++finished[color_of[k]];
+        return v;
+      });
+    });
+    for (int k = 0; k < chunks; ++k) EXPECT_EQ(calls[k].load(), 1) << "chunk " << k;
+    return sum;
+  };
+  const double one = run(1);
+  EXPECT_EQ(run(2), one);
+  EXPECT_EQ(run(4), one);
 }
 
 }  // namespace

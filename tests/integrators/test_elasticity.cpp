@@ -9,18 +9,12 @@
 #include "core/error.hpp"
 #include "core/mesh_generators.hpp"
 #include "integrators/elasticity.hpp"
+#include "integrators/tet_kernel.hpp"
+#include "materials/all_models.hpp"
+#include "materials/lanes.hpp"
 
 namespace depthfem {
 namespace {
-
-std::vector<MaterialModel> all_models() {
-  return {NeoHookean::from_youngs(3e4, 0.4),
-          MooneyRivlin{4e3, 1e3, 2e4},
-          Veronda{1.5e3, 0.8, 2e4},
-          NearlyIncompressibleMooneyRivlin{4e3, 1e3, 2e5},
-          FiberReinforced<MooneyRivlin>{{4e3, 1e3, 2e4}, 2e3, 3.0},
-          FiberReinforced<Veronda>{{1.5e3, 0.8, 2e4}, 2e3, 3.0}};
-}
 
 ElasticGroup whole_mesh(const TetMesh& m, const MaterialModel& model, const Vec3& fiber) {
   ElasticGroup g{model, std::vector<Index>(m.tets.rows()), Points()};
@@ -146,6 +140,57 @@ TEST(Elasticity, SameResultsOnOneAndTwoThreads) {
       (one.hessian.to_sparse().coeffs() - two.hessian.to_sparse().coeffs()).cwiseAbs().maxCoeff(),
       0.0);
   EXPECT_NEAR(one.energy, two.energy, 1e-12 * std::abs(one.energy));  // the requirement
+}
+
+// The module runs whole batches of kLanes rows through the batched kernel and the rows left at the
+// end of a chunk through the scalar one. 5 x 3 x 3 cells = 270 tets, of which the group takes 269:
+// one chunk with a remainder for every lane count (269 = 33 x 8 + 5 = 67 x 4 + 1 = 134 x 2 + 1).
+// Reference: tet_local on every tet, scattered through block_index. The kernels agree to rounding
+// (~1e-16, see test_batched_tet_kernel.cpp), and the sums over at most 24 tets per entry keep it
+// there: 1e-13 of the largest entry.
+TEST(Elasticity, BatchedAssemblyEqualsTheScalarKernelEverywhere) {
+  const TetMesh m = box_mesh({Vec3::Zero(), Vec3(0.5, 0.3, 0.3), Eigen::Vector3i(5, 3, 3)});
+  const Index n = static_cast<Index>(m.tets.rows()) - 1;
+  ASSERT_NE(n % kLanes, 0);
+  const Points x = perturbed(m.X, 0.01, 9);
+  const Vec3 fiber = Vec3(0.3, -1, 0.5).normalized();
+  for (const MaterialModel& model : all_models()) {
+    ElasticGroup group = whole_mesh(m, model, fiber);
+    group.tets.pop_back();
+    if (group.fibers.rows()) group.fibers.conservativeResize(n, 3);
+    Elasticity e(m.X, m.tets, {group});
+    const Assembled r = assemble(e, x);
+    double energy = 0;
+    VectorX gradient = VectorX::Zero(3 * x.rows());
+    BlockSparseMatrix H = r.hessian;
+    H.set_zero();
+    for (Index t = 0; t < n; ++t) {
+      Mat3 Dm, Ds;
+      for (int a = 0; a < 3; ++a) {
+        Dm.col(a) = (m.X.row(m.tets(t, a + 1)) - m.X.row(m.tets(t, 0))).transpose();
+        Ds.col(a) = (x.row(m.tets(t, a + 1)) - x.row(m.tets(t, 0))).transpose();
+      }
+      TetLocal local;
+      std::visit(
+          [&](const auto& mat) {
+            tet_local<2>(mat, Ds, Mat3(Dm.inverse()), Dm.determinant() / 6, fiber, local);
+          },
+          model);
+      energy += local.energy;
+      for (int a = 0; a < 4; ++a) {
+        gradient.segment<3>(3 * m.tets(t, a)) += local.gradient.col(a);
+        for (int b = 0; b < 4; ++b)
+          H.add_block(H.block_index(m.tets(t, a), m.tets(t, b)),
+                      local.hessian.block<3, 3>(3 * a, 3 * b));
+      }
+    }
+    EXPECT_NEAR(r.energy, energy, 1e-13 * std::abs(energy)) << material_name(model);
+    EXPECT_LE((r.gradient - gradient).cwiseAbs().maxCoeff(), 1e-13 * gradient.cwiseAbs().maxCoeff())
+        << material_name(model);
+    const Eigen::MatrixXd batched(r.hessian.to_sparse()), scalar(H.to_sparse());
+    EXPECT_LE((batched - scalar).cwiseAbs().maxCoeff(), 1e-13 * scalar.cwiseAbs().maxCoeff())
+        << material_name(model);
+  }
 }
 
 TEST(Elasticity, InvertedTetGivesInfiniteEnergyAndIsNamed) {

@@ -249,14 +249,14 @@ struct PrintedVeronda {
   static constexpr bool kUsesI2 = true;
   static constexpr bool kUsesFiber = false;
   template <int kOrder>
-  InvariantDerivatives evaluate(const Invariants& inv) const {
+  InvariantDerivatives<> evaluate(const Invariants<>& inv) const {
     const double I3 = inv.J * inv.J;
-    InvariantDerivatives e;
+    InvariantDerivatives<> e;
     e.psi =
         2 * alpha * std::exp(inv.I1 - 3) + alpha * beta * (inv.I2 - 3) + a * I3 - a * std::log(I3);
-    e.d(kI1) = 2 * alpha * std::exp(inv.I1 - 3);
-    e.d(kI2) = alpha * beta;
-    e.d(kJ) = 2 * a * inv.J - 2 * a / inv.J;
+    e.d[kI1] = 2 * alpha * std::exp(inv.I1 - 3);
+    e.d[kI2] = alpha * beta;
+    e.d[kJ] = 2 * a * inv.J - 2 * a / inv.J;
     return e;
   }
 };
