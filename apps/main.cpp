@@ -3,9 +3,11 @@
 //   depthfem info RESULT.h5
 // Exit code 0 only when the whole run succeeded; otherwise one line "depthfem: error: ..." on
 // stderr (2 for usage errors, 1 for input or solver errors).
+#include <charconv>
 #include <cstdio>
 #include <exception>
 #include <iostream>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -23,6 +25,30 @@ struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// `text` on one line: control characters (a newline in a key or a file name) written as \xNN.
+std::string one_line(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+      char escaped[8];
+      std::snprintf(escaped, sizeof escaped, "\\x%02x", static_cast<unsigned char>(c));
+      out += escaped;
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+// A strictly positive int, all of `text` ("3x" and "1e2" are refused).
+int positive_int(const std::string& text) {
+  int value = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (ec != std::errc() || end != text.data() + text.size() || value < 1)
+    throw UsageError("--threads expects a positive integer, got '" + text + "'");
+  return value;
+}
+
 int run(const std::vector<std::string>& args) {
   using namespace depthfem;
   if (args.empty()) throw UsageError("run needs a scene file");
@@ -37,14 +63,7 @@ int run(const std::vector<std::string>& args) {
     if (args[i] == "--out") {
       options.out = value();
     } else if (args[i] == "--threads") {
-      const std::string& v = value();
-      try {
-        options.threads = std::stoi(v);
-      } catch (const std::exception&) {
-        throw UsageError("--threads expects a positive integer, got '" + v + "'");
-      }
-      if (options.threads < 1)
-        throw UsageError("--threads expects a positive integer, got '" + v + "'");
+      options.threads = positive_int(value());
     } else if (args[i] == "--set") {
       overrides.push_back(parse_override(value()));
     } else if (args[i].rfind("--", 0) == 0) {
@@ -62,8 +81,10 @@ int run(const std::vector<std::string>& args) {
   const RunResult r = run_scene(scene, options, std::cout);
   print_timing(r.timers, r.seconds, std::cout);
   if (!r.success) {
-    std::cerr << "depthfem: error: " << r.message << " (" << r.steps.size()
-              << " completed steps kept in " << options.out << ")\n";
+    std::cerr << "depthfem: error: "
+              << one_line(r.message + " (" + std::to_string(r.steps.size()) +
+                          " completed steps kept in " + options.out + ")")
+              << "\n";
     return 1;
   }
   std::cout << "completed " << r.steps.size() << " steps in " << r.seconds << " s; results in "
@@ -107,10 +128,13 @@ int main(int argc, char** argv) {
     if (args[0] == "info") return info(rest);
     throw UsageError("unknown command '" + args[0] + "'");
   } catch (const UsageError& e) {
-    std::cerr << "depthfem: error: " << e.what() << "\n" << kUsage;
+    std::cerr << "depthfem: error: " << one_line(e.what()) << "\n" << kUsage;
     return 2;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "depthfem: error: out of memory\n";
+    return 1;
   } catch (const std::exception& e) {
-    std::cerr << "depthfem: error: " << e.what() << "\n";
+    std::cerr << "depthfem: error: " << one_line(e.what()) << "\n";
     return 1;
   }
 }

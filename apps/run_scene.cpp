@@ -3,7 +3,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
+#include <new>
 
 #include "apps/scene_model.hpp"
 #include "contact/penetration_depth.hpp"
@@ -52,6 +54,21 @@ std::vector<std::string> body_materials(const Scene& scene) {
   return out;
 }
 
+// Throws when `out`, or a file written beside it, is one of `inputs` (the same file under any
+// name).
+void refuse_overwriting_inputs(const std::string& out, const std::vector<std::string>& inputs) {
+  const std::filesystem::path sidecar = std::filesystem::path(out).replace_extension(".xmf");
+  for (const std::filesystem::path& written : {std::filesystem::path(out), sidecar}) {
+    for (const std::string& input : inputs) {
+      std::error_code error;
+      if (std::filesystem::equivalent(written, input, error)) {
+        throw InputError(located(
+            out, 0, "--out would overwrite the input " + input + "; choose another results path"));
+      }
+    }
+  }
+}
+
 }  // namespace
 
 void print_timing(const PhaseTimers& timers, double total, std::ostream& out) {
@@ -81,7 +98,13 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   RunResult result;
 
   // Build.
-  const std::unique_ptr<SceneModel> model = build_model(scene, result.timers);
+  // Errors the scene reader could not see (a conflict found by a module) name the scene.
+  std::unique_ptr<SceneModel> model;
+  try {
+    model = build_model(scene, result.timers);
+  } catch (const InputError& e) {
+    throw InputError(scene.file + ": " + e.what());
+  }
   const Mesh& mesh = scene.mesh;
   const DynamicOptions& dyn = model->dynamic_options;
 
@@ -89,6 +112,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   std::unique_ptr<ResultsFile> file;
   const ResultFields fields = result_fields(scene);
   if (!options.out.empty()) {
+    refuse_overwriting_inputs(options.out, scene.inputs);
     RunInfo info{scene.json_text,
                  kVersion,
                  scene.analysis,
@@ -105,20 +129,13 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
       << to_string(model->static_options.newton.linear.kind) << ", Newton tolerance "
       << format("%.3g", scene.tolerance) << " x E h^2 per dof" << std::endl;
 
-  // Drive: every completed step is printed, written and kept.
+  // Drive: every completed step is written, then printed (so a printed step is on disk) and kept.
   const auto on_step = [&](const StepRecord& done, const Points& x, const Points* v) {
     StepRecord step = done;
     if (model->contact) {
       PhaseTimers::Scope t(result.timers, "output: penetration");
       step.penetration = deepest_penetration(mesh, x, model->contact->pairs());
     }
-    log << format("step %4d  %s %.4f%s  newton %2d  linear %5d  residual %.3e  energy % .6e",
-                  int(step.index), v ? "time" : "load", step.load, step.settling ? " (settle)" : "",
-                  step.newton_iterations, step.linear_iterations, step.residuals.back(),
-                  step.energy)
-        << (step.penetration ? format("  penetration %.3f mm", 1e3 * *step.penetration) : "")
-        << format("  %.2f s\n", step.seconds);
-    log.flush();  // one line per step even when the log is a file
     if (file) {
       ElementFields elements;
       if (fields.stress || fields.strain) {
@@ -130,6 +147,13 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
       file->append_step(step, x, v, &elements);
       file->write_timing(result.timers.phases());  // a run killed later keeps its timing so far
     }
+    log << format("step %4d  %s %.4f%s  newton %2d  linear %5d  residual %.3e  energy % .6e",
+                  int(step.index), v ? "time" : "load", step.load, step.settling ? " (settle)" : "",
+                  step.newton_iterations, step.linear_iterations, step.residuals.back(),
+                  step.energy)
+        << (step.penetration ? format("  penetration %.3f mm", 1e3 * *step.penetration) : "")
+        << format("  %.2f s\n", step.seconds);
+    log.flush();  // one line per step even when the log is a file
     result.steps.push_back(step);
     if (options.observer) options.observer(step, x);
   };
@@ -158,13 +182,23 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     result.success = true;
   } catch (const SolveError& e) {
     result.message = e.what();
+  } catch (const InputError& e) {  // a step the results file refused, a stepper's input check
+    result.message = e.what();
+  } catch (const std::bad_alloc&) {
+    result.message = "out of memory";
   }
 
   // Finish.
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  // A file that can no longer be written (a full disk) keeps its last flushed state.
   if (file) {
-    file->write_timing(result.timers.phases());
-    file->finish(result.success, result.message);
+    try {
+      file->write_timing(result.timers.phases());
+      file->finish(result.success, result.message);
+    } catch (const InputError& e) {
+      result.message += (result.message.empty() ? "" : "; then ") + std::string(e.what());
+      result.success = false;
+    }
   }
   return result;
 }

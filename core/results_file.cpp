@@ -1,9 +1,14 @@
 #include "core/results_file.hpp"
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
+#include <utility>
 
 #include "core/error.hpp"
 #include "core/hdf5_file.hpp"
@@ -102,7 +107,49 @@ std::vector<StepValue> step_values(const StepRecord& step, bool velocity,
 
 }  // namespace
 
+// The writer's lock on a results file: the hidden file ".NAME.lock" beside it holds an
+// exclusive flock and the writer's process id while the run writes, so that a second run with
+// the same --out is refused before it truncates the file. Removed with the writer.
+class WriterLock {
+ public:
+  WriterLock(const std::string& path, const std::filesystem::path& lock_path)
+      : lock_path_(lock_path.string()) {
+    fd_ = ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0) throw InputError(located(path, 0, "cannot create the lock file " + lock_path_));
+    if (flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      char pid[32] = {};
+      const ssize_t n = pread(fd_, pid, sizeof pid - 1, 0);
+      ::close(fd_);
+      throw InputError(located(path, 0,
+                               "is being written by another depthfem run (process " +
+                                   std::string(pid, n > 0 ? size_t(n) : 0) +
+                                   "); wait for it to end or choose another --out"));
+    }
+    const std::string pid = std::to_string(getpid());
+    if (ftruncate(fd_, 0) != 0 || pwrite(fd_, pid.data(), pid.size(), 0) < 0) {
+      ::close(fd_);
+      throw InputError(located(path, 0, "cannot write the lock file " + lock_path_));
+    }
+  }
+  WriterLock(WriterLock&& other) noexcept
+      : lock_path_(std::move(other.lock_path_)), fd_(std::exchange(other.fd_, -1)) {}
+  WriterLock(const WriterLock&) = delete;
+  WriterLock& operator=(const WriterLock&) = delete;
+  WriterLock& operator=(WriterLock&&) = delete;
+  ~WriterLock() {
+    if (fd_ < 0) return;
+    std::error_code ignored;
+    std::filesystem::remove(lock_path_, ignored);  // before the lock is released
+    ::close(fd_);
+  }
+
+ private:
+  std::string lock_path_;
+  int fd_ = -1;
+};
+
 struct ResultsFile::State {
+  WriterLock lock;  // taken before the file is created (truncated)
   H5File file;
   Points X;  ///< reference positions, for displacements
   Index num_tets = 0;
@@ -151,7 +198,9 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
                              "the initial velocity has " +
                                  std::to_string(info.initial_velocity.rows()) + " rows, the mesh " +
                                  std::to_string(mesh.num_nodes()) + " nodes"));
-  state_ = std::make_unique<State>(State{H5File::create(path),
+  WriterLock lock(path, fs_path.parent_path() / ("." + fs_path.filename().string() + ".lock"));
+  state_ = std::make_unique<State>(State{std::move(lock),
+                                         H5File::create(path),
                                          mesh.X,
                                          mesh.num_tets(),
                                          mesh.tris,

@@ -52,4 +52,29 @@ grep -q "^step    1" "$tmp/killed.log" || fail "no progress line reached the log
 "$exe" info "$tmp/killed.h5" > "$tmp/info3.log" || fail "info on the killed run exited $?"
 grep -q "status: running" "$tmp/info3.log" || fail "killed run: $(cat "$tmp/info3.log")"
 grep -q "linear solve" "$tmp/info3.log" || fail "the killed run kept no timing"
+# Inputs are never overwritten: --out naming the scene (here through a second name) is refused.
+cp "$src/apps/scenes/uniaxial_block.json" "$tmp/scene.json"
+ln -s scene.json "$tmp/alias.h5"
+"$exe" run "$tmp/scene.json" --out "$tmp/alias.h5" > /dev/null 2> "$tmp/in.log"
+[ $? -eq 1 ] || fail "--out equal to the scene must exit 1"
+grep -q "would overwrite the input" "$tmp/in.log" || fail "--out = scene: $(cat "$tmp/in.log")"
+cmp -s "$tmp/scene.json" "$src/apps/scenes/uniaxial_block.json" || fail "the scene was overwritten"
+
+# A second writer on the same results file is refused while the first runs, and leaves its file.
+"$exe" run "$src/apps/scenes/falling_bars.json" --out "$tmp/busy.h5" --threads 1 > "$tmp/first.log" 2>&1 &
+first=$!
+for _ in $(seq 200); do grep -q "^step    0" "$tmp/first.log" && break; sleep 0.05; done
+size=$(stat -c %s "$tmp/busy.h5")
+"$exe" run "$src/apps/scenes/uniaxial_block.json" --out "$tmp/busy.h5" > /dev/null 2> "$tmp/busy.log"
+rc=$?
+[ "$(stat -c %s "$tmp/busy.h5")" -ge "$size" ] || fail "the second writer truncated the first's file"
+kill -9 $first 2> /dev/null; wait $first 2> /dev/null
+[ $rc -eq 1 ] || fail "a second writer must exit 1, got $rc"
+grep -q "busy.h5: is being written by another depthfem run (process $first)" "$tmp/busy.log" || fail "second writer: $(cat "$tmp/busy.log")"
+
+# Every error is one line, even for a key holding a newline; --threads takes a positive integer.
+"$exe" run "$tmp/scene.json" --out "$tmp/y.h5" --set "$(printf 'a\nb')=1" > /dev/null 2> "$tmp/nl.log"
+[ "$(wc -l < "$tmp/nl.log")" -eq 1 ] || fail "error over several lines: $(cat "$tmp/nl.log")"
+"$exe" run "$tmp/scene.json" --out "$tmp/y.h5" --threads 3x > /dev/null 2>&1
+[ $? -eq 2 ] || fail "--threads 3x must be a usage error"
 echo "cli: all checks passed"
