@@ -5,15 +5,11 @@
 #include "contact/contact_surface.hpp"
 #include "contact/penalty.hpp"
 #include "core/error.hpp"
+#include "core/overloaded.hpp"
 
 namespace depthfem {
 
 namespace {
-
-template <class... F>
-struct Overloaded : F... {
-  using F::operator()...;
-};
 
 // Depth of point q into the obstacle at load factor `load` (positive inside), with its gradient
 // and Hessian in q: a plane's depth n . (a - q) is linear; a sphere's R - |q - c| has gradient

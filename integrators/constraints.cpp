@@ -4,15 +4,11 @@
 #include <tbb/parallel_for.h>
 
 #include "core/error.hpp"
+#include "core/overloaded.hpp"
 
 namespace depthfem {
 
 namespace {
-
-template <class... F>
-struct Overloaded : F... {
-  using F::operator()...;
-};
 
 // A unit vector, or InputError naming the condition.
 Vec3 unit(const Vec3& v, const std::string& name, const char* what) {
