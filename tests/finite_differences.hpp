@@ -32,6 +32,21 @@ auto central_directional(const G& g, const Vector& x, const Vector& v, double h)
   return ((g(x + h * v) - g(x - h * v)) / (2 * h)).eval();
 }
 
+/// The Jacobian of a vector function g by central differences: column i is dg/dx_i (of a
+/// gradient function, the Hessian).
+template <class Vector, class G>
+Eigen::MatrixXd central_jacobian(const G& g, const Vector& x, double h) {
+  Eigen::MatrixXd J;
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    Vector e = Vector::Zero(x.size());
+    e(i) = 1;
+    const auto column = central_directional(g, x, e, h);
+    J.resize(column.size(), x.size());
+    J.col(i) = column;
+  }
+  return J;
+}
+
 /// central_gradient of a function of #nodes x 3 positions, as an interleaved dof vector
 /// (3 * node + component), the layout of every force module's gradient.
 template <class F>

@@ -116,6 +116,8 @@ class Results:
             values[f"reaction {name}"] = g["reactions"][k]
         if self.contacts:
             values["contact_area"] = [g.attrs["contact_area"]]
+        if "penetration" in g.attrs:
+            values["penetration"] = [g.attrs["penetration"]]
         for k, name in enumerate(self.contacts):
             values[f"contact_force {name}"] = g["contact_forces"][k]
             values[f"contact_force_magnitude {name}"] = [g["contact_force_magnitudes"][k]]

@@ -11,6 +11,7 @@
 #include "contact/node_to_surface_contact.hpp"
 #include "contact/obstacle_contact.hpp"
 #include "core/mesh_generators.hpp"
+#include "finite_differences.hpp"
 
 namespace depthfem {
 namespace {
@@ -46,6 +47,18 @@ TEST(MaterialDepthContact, UndeformedBodiesWithSelfContactHaveNoContactForces) {
   EXPECT_EQ(r.gradient.cwiseAbs().maxCoeff(), 0.0);
   EXPECT_EQ(r.hessian.coeffs().size() ? r.hessian.coeffs().cwiseAbs().maxCoeff() : 0.0, 0.0);
   EXPECT_GT(c.stats().candidates, 0) << "neighbouring elements must have been examined";
+}
+
+// The gradient of a contact module as a function of the interleaved dofs, its pairs found anew
+// at every point.
+auto module_gradient(ForceModule& module) {
+  return [&module](const VectorX& z) {
+    const Points y = as_points(z);
+    module.prepare(y);
+    VectorX g = VectorX::Zero(z.size());
+    module.evaluate(y, &g, nullptr);
+    return g;
+  };
 }
 
 // Two boxes overlapping by a third of the upper one's height, with self-contact on; random
@@ -96,29 +109,19 @@ TEST(MaterialDepthContact, AssembledDerivativesMatchFiniteDifferences) {
   ASSERT_GT(r.energy, 0);
   ASSERT_GT(c.stats().active, 20);
   const double h = 1e-7;
-  VectorX fd(r.gradient.size());
-  for (Index i = 0; i < x.size(); ++i) {
-    Points xp = x, xm = x;
-    xp(i / 3, i % 3) += h;
-    xm(i / 3, i % 3) -= h;
-    c.prepare(xp);
-    const double ep = c.evaluate(xp, nullptr, nullptr);
-    c.prepare(xm);
-    fd(i) = (ep - c.evaluate(xm, nullptr, nullptr)) / (2 * h);
-  }
+  const VectorX fd = testing::central_gradient_dofs(
+      [&](const Points& y) {
+        c.prepare(y);
+        return c.evaluate(y, nullptr, nullptr);
+      },
+      x, h);
   EXPECT_LE((r.gradient - fd).cwiseAbs().maxCoeff(), 1e-6 * r.gradient.cwiseAbs().maxCoeff());
   std::normal_distribution<double> n;
   VectorX v(x.size());
   for (Index i = 0; i < v.size(); ++i) v(i) = n(rng);
-  const Points dir = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
-      v.data(), x.rows(), 3);
-  VectorX gp = VectorX::Zero(v.size()), gm = VectorX::Zero(v.size());
-  c.prepare(x + h * dir);
-  c.evaluate(x + h * dir, &gp, nullptr);
-  c.prepare(x - h * dir);
-  c.evaluate(x - h * dir, &gm, nullptr);
   const VectorX Hv = r.hessian * v;
-  EXPECT_LE((Hv - (gp - gm) / (2 * h)).cwiseAbs().maxCoeff(), 1e-5 * Hv.cwiseAbs().maxCoeff());
+  const VectorX Hv_fd = testing::central_directional(module_gradient(c), as_dofs(x), v, h);
+  EXPECT_LE((Hv - Hv_fd).cwiseAbs().maxCoeff(), 1e-5 * Hv.cwiseAbs().maxCoeff());
 }
 
 // Energy, gradient and Hessian of a module at x on `threads` threads, into a matrix bound to it.
@@ -342,15 +345,11 @@ TEST(ObstacleContact, HessianMatchesFiniteDifferencesOfTheGradient) {
   std::normal_distribution<double> n;
   const double h = 1e-7;
   for (int trial = 0; trial < 3; ++trial) {
-    Points dir(x.rows(), 3);
-    for (Index i = 0; i < dir.size(); ++i) dir(i) = n(rng);
-    VectorX gp = VectorX::Zero(x.size()), gm = VectorX::Zero(x.size());
-    o.prepare(x + h * dir);
-    o.evaluate(x + h * dir, &gp, nullptr);
-    o.prepare(x - h * dir);
-    o.evaluate(x - h * dir, &gm, nullptr);
-    const VectorX Hv = r.hessian * as_dofs(dir);
-    EXPECT_LE((Hv - (gp - gm) / (2 * h)).cwiseAbs().maxCoeff(), 1e-5 * Hv.cwiseAbs().maxCoeff());
+    VectorX v(x.size());
+    for (Index i = 0; i < v.size(); ++i) v(i) = n(rng);
+    const VectorX Hv = r.hessian * v;
+    const VectorX Hv_fd = testing::central_directional(module_gradient(o), as_dofs(x), v, h);
+    EXPECT_LE((Hv - Hv_fd).cwiseAbs().maxCoeff(), 1e-5 * Hv.cwiseAbs().maxCoeff());
   }
 }
 

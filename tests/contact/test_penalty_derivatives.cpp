@@ -8,6 +8,7 @@
 #include "contact/clip.hpp"
 #include "contact/penalty.hpp"
 #include "contact/penalty_derivatives.hpp"
+#include "finite_differences.hpp"
 
 namespace depthfem {
 namespace {
@@ -60,16 +61,14 @@ TEST(PenaltyDerivatives, MatchFiniteDifferencesInEveryClipCase) {
     for (int k = 0; k < poly.size; ++k) ++kinds[static_cast<int>(poly.vertex[k].kind)];
     EXPECT_NEAR(W.v, energy(z, g), 1e-12 * W.v);
     const double h = 1e-6;
-    Vec21 grad_fd;
-    Eigen::Matrix<double, 21, 21> hess_fd;
-    for (int i = 0; i < 21; ++i) {
-      Vec21 zp = z, zm = z;
-      zp(i) += h;
-      zm(i) -= h;
-      grad_fd(i) = (energy(zp, g) - energy(zm, g)) / (2 * h);
-      ClipPolygon pp, pm;
-      hess_fd.col(i) = (energy_dual(zp, g, &pp).g - energy_dual(zm, g, &pm).g) / (2 * h);
-    }
+    const Vec21 grad_fd =
+        testing::central_gradient([&](const Vec21& y) { return energy(y, g); }, z, h);
+    const Eigen::MatrixXd hess_fd = testing::central_jacobian(
+        [&](const Vec21& y) {
+          ClipPolygon clipped;
+          return energy_dual(y, g, &clipped).g;
+        },
+        z, h);
     EXPECT_LE((W.g - grad_fd).cwiseAbs().maxCoeff(), 1e-6 * W.g.cwiseAbs().maxCoeff())
         << "config " << tested;
     EXPECT_LE((W.h - hess_fd).cwiseAbs().maxCoeff(), 1e-5 * W.h.cwiseAbs().maxCoeff())
@@ -276,15 +275,10 @@ TEST(StagedObstacleDerivatives, EqualAutomaticDifferentiationAndFiniteDifference
     EXPECT_LE((hess - W.h).cwiseAbs().maxCoeff(), 1e-10 * W.h.cwiseAbs().maxCoeff());
     EXPECT_EQ((grad_only - grad).cwiseAbs().maxCoeff(), 0.0);
     const double h = 1e-6;
-    Vec9 grad_fd;
-    TriangleHessian hess_fd;
-    for (int i = 0; i < 9; ++i) {
-      Vec9 zp = z, zm = z;
-      zp(i) += h;
-      zm(i) -= h;
-      grad_fd(i) = (field_energy<double>(zp) - field_energy<double>(zm)) / (2 * h);
-      hess_fd.col(i) = (field_energy<Dual2<9>>(zp).g - field_energy<Dual2<9>>(zm).g) / (2 * h);
-    }
+    const Vec9 grad_fd =
+        testing::central_gradient([&](const Vec9& y) { return field_energy<double>(y); }, z, h);
+    const Eigen::MatrixXd hess_fd =
+        testing::central_jacobian([&](const Vec9& y) { return field_energy<Dual2<9>>(y).g; }, z, h);
     EXPECT_LE((grad - grad_fd).cwiseAbs().maxCoeff(), 1e-6 * grad.cwiseAbs().maxCoeff());
     EXPECT_LE((hess - hess_fd).cwiseAbs().maxCoeff(), 1e-5 * hess.cwiseAbs().maxCoeff());
   }

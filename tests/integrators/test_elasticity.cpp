@@ -8,6 +8,7 @@
 
 #include "core/error.hpp"
 #include "core/mesh_generators.hpp"
+#include "finite_differences.hpp"
 #include "integrators/elasticity.hpp"
 #include "integrators/tet_kernel.hpp"
 #include "materials/all_models.hpp"
@@ -92,13 +93,8 @@ TEST(Elasticity, GradientAndHessianMatchFiniteDifferences) {
     Assembled r = assemble(e, x);
     ASSERT_TRUE(std::isfinite(r.energy));
     const double h = 1e-7;
-    VectorX g_fd(r.gradient.size());
-    for (Index i = 0; i < x.size(); ++i) {
-      Points xp = x, xm = x;
-      xp(i / 3, i % 3) += h;
-      xm(i / 3, i % 3) -= h;
-      g_fd(i) = (e.evaluate(xp, nullptr, nullptr) - e.evaluate(xm, nullptr, nullptr)) / (2 * h);
-    }
+    const VectorX g_fd = testing::central_gradient_dofs(
+        [&](const Points& y) { return e.evaluate(y, nullptr, nullptr); }, x, h);
     EXPECT_LE((r.gradient - g_fd).cwiseAbs().maxCoeff(), 1e-6 * r.gradient.cwiseAbs().maxCoeff())
         << material_name(model);
 
@@ -106,14 +102,14 @@ TEST(Elasticity, GradientAndHessianMatchFiniteDifferences) {
     EXPECT_LE((Eigen::MatrixXd(H) - Eigen::MatrixXd(H).transpose()).cwiseAbs().maxCoeff(),
               1e-10 * H.coeffs().cwiseAbs().maxCoeff());
     for (int trial = 0; trial < 3; ++trial) {
-      Points dir(x.rows(), 3);
-      for (Index i = 0; i < dir.size(); ++i) dir(i) = n(rng);
       VectorX v(x.size());
-      for (Index i = 0; i < x.size(); ++i) v(i) = dir(i / 3, i % 3);
-      VectorX gp = VectorX::Zero(x.size()), gm = VectorX::Zero(x.size());
-      e.evaluate(x + h * dir, &gp, nullptr);
-      e.evaluate(x - h * dir, &gm, nullptr);
-      const VectorX Hv = H * v, Hv_fd = (gp - gm) / (2 * h);
+      for (Index i = 0; i < v.size(); ++i) v(i) = n(rng);
+      const auto gradient = [&](const VectorX& z) {
+        VectorX g = VectorX::Zero(z.size());
+        e.evaluate(as_points(z), &g, nullptr);
+        return g;
+      };
+      const VectorX Hv = H * v, Hv_fd = testing::central_directional(gradient, as_dofs(x), v, h);
       EXPECT_LE((Hv - Hv_fd).cwiseAbs().maxCoeff(), 1e-6 * Hv.cwiseAbs().maxCoeff())
           << material_name(model);
     }

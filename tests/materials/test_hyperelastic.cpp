@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 
+#include "finite_differences.hpp"
 #include "materials/closed_forms.hpp"
 #include "materials/material.hpp"
 
@@ -98,14 +99,8 @@ TYPED_TEST(MaterialTest, StressMatchesFiniteDifferencesOfEnergy) {
     const Mat3 F = rnd.F();
     const Vec3 f = rnd.fiber();
     const Mat3 P = first_piola(m, F, f);
-    const double h = 1e-6;
-    Mat3 P_fd;
-    for (int i = 0; i < 9; ++i) {
-      Mat3 Fp = F, Fm = F;
-      Fp(i) += h;
-      Fm(i) -= h;
-      P_fd(i) = (energy_density(m, Fp, f) - energy_density(m, Fm, f)) / (2 * h);
-    }
+    const Mat3 P_fd =
+        testing::central_gradient([&](const Mat3& G) { return energy_density(m, G, f); }, F, 1e-6);
     EXPECT_LE((P - P_fd).cwiseAbs().maxCoeff(), 1e-6 * P.cwiseAbs().maxCoeff() + 1e-6)
         << "trial " << trial << "\nP=\n"
         << P << "\nfd=\n"
@@ -120,13 +115,12 @@ TYPED_TEST(MaterialTest, StressDerivativeMatchesFiniteDifferencesOfStress) {
     const Mat3 F = rnd.F();
     const Vec3 f = rnd.fiber();
     const Mat9 D = first_piola_derivative(m, F, f);
-    const double h = 1e-6;
     Mat9 D_fd;
-    for (int k = 0; k < 9; ++k) {
-      Mat3 Fp = F, Fm = F;
-      Fp(k) += h;
-      Fm(k) -= h;
-      const Mat3 dP = (first_piola(m, Fp, f) - first_piola(m, Fm, f)) / (2 * h);
+    for (int k = 0; k < 9; ++k) {  // column k: dP/dF_k, the derivative along the unit F_k
+      Mat3 E = Mat3::Zero();
+      E(k) = 1;
+      const Mat3 dP = testing::central_directional(
+          [&](const Mat3& G) { return first_piola(m, G, f); }, F, E, 1e-6);
       D_fd.col(k) = Eigen::Map<const Vec9>(dP.data());
     }
     EXPECT_LE((D - D_fd).cwiseAbs().maxCoeff(), 1e-6 * D.cwiseAbs().maxCoeff())
