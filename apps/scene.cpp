@@ -503,6 +503,8 @@ void read_solver(JsonObject s, Scene& scene) {
   o.predictor = s.boolean("predictor", o.predictor);
   o.max_settle_steps = s.integer("max_settle_steps", o.max_settle_steps);
   scene.quasi_viscosity = s.number("quasi_viscosity", 0.0);
+  scene.elasticity.project_hessian =
+      s.boolean("hessian_projection", scene.elasticity.project_hessian);
   scene.tolerance = s.number("tolerance", scene.tolerance);
   scene.ramp_body_loads = s.boolean("ramp_body_loads", scene.ramp_body_loads);
   if (!(o.min_increment > 0 && o.min_increment <= o.initial_increment && o.initial_increment <= 1 &&

@@ -30,7 +30,8 @@ std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers)
   const Mesh& mesh = scene.mesh;
   auto model = std::make_unique<SceneModel>(mesh.num_nodes(), timers);
   System& system = model->system;
-  model->elasticity = &system.add(std::make_unique<Elasticity>(mesh.X, mesh.tets, scene.groups));
+  model->elasticity =
+      &system.add(std::make_unique<Elasticity>(mesh.X, mesh.tets, scene.groups, scene.elasticity));
   model->lumped_mass = lumped_mass(mesh.X, mesh.tets, scene.tet_density);
   const VectorX& mass = model->lumped_mass;
   const bool time_dependent = scene.analysis != "static";

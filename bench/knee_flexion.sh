@@ -19,5 +19,6 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 status=0
 build/apps/depthfem run "$scene" --out "$tmp/run.h5" "$@" > "$out.log" 2>&1 || status=$?
+sed -i "s|$tmp/run.h5|RUN.h5|g" "$out.log"  # the log names no temporary path
 /usr/bin/python3 bench/knee_report.py "$tmp/run.h5" "$out.log" "$out"
 exit $status

@@ -17,7 +17,7 @@ enum class DirectOrdering {
 
 /// What the direct solver does when A is not positive definite (LL^T fails).
 enum class IndefiniteFallback {
-  kShift,  ///< factor A + s I by LL^T, s growing until it succeeds: a descent direction
+  kShift,  ///< factor A + s diag|A| by LL^T, s growing until it succeeds: a descent direction
   kLdlt,   ///< factor A itself by simplicial LDL^T: the exact solution of the indefinite system
 };
 
@@ -42,7 +42,7 @@ struct DirectSolveStats {
   bool success = false;   ///< x is finite and solves A x = b (or (A + s I) x = b)
   bool factored = false;  ///< A was factored (false: CG on the kept factor was enough)
   int cg_iterations = 0;  ///< CG iterations on the kept factor (also when they fell short)
-  double shift = 0;       ///< s of the factored A + s I (0: A itself)
+  double shift = 0;       ///< s of the factored A + s diag|A| (0: A itself)
   bool ldlt = false;      ///< the LDL^T fallback was used
 };
 
@@ -65,7 +65,7 @@ class DirectSolver {
 
   /// Orders and analyses the pattern of A unless it was already (the solve then reuses it).
   const DirectAnalysis& analyse(const BlockSparseMatrix& A);
-  /// x = A^-1 b (or (A + s I)^-1 b, see DirectSolveStats::shift).
+  /// x = A^-1 b (or (A + s diag|A|)^-1 b, see DirectSolveStats::shift).
   DirectSolveStats solve(const BlockSparseMatrix& A, const VectorX& b, VectorX& x);
 
  private:

@@ -11,6 +11,7 @@
 #include "core/element_partition.hpp"
 #include "core/error.hpp"
 #include "integrators/inversion_step.hpp"
+#include "integrators/psd_projection.hpp"
 #include "integrators/tet_inputs.hpp"
 #include "integrators/tet_kernel.hpp"
 
@@ -64,14 +65,22 @@ void prefetch_blocks(const Index* off, int count, BlockSparseMatrix& H) {
   }
 }
 
+// Projects the Hessian of every lane of a batch onto the positive semi-definite matrices.
+template <class V>
+void project_batch(TetBatch<V>& t) {
+  for (int l = 0; l < V::kWidth; ++l) {
+    Mat12 h = t.hessian_of(l);
+    if (project_to_psd(h)) t.set_hessian_of(l, h);
+  }
+}
+
 // Walks rows [begin, end) of a block in order: energy sum, and scatter of gradient / Hessian.
 // Whole batches of kLanes rows go through the batched kernel, the rows left over through the
-// scalar one. Each tet's 12x12 Hessian is complete between kernel and scatter (batch.hessian_of(l)
-// and set_hessian_of, local.hessian): a per-element modification such as a projection to positive
-// semi-definite belongs there.
+// scalar one. With `project`, each tet's 12x12 Hessian is projected to positive semi-definite
+// between kernel and scatter.
 template <int kOrder, class M>
 double run_rows(const M& m, const TetBlock& b, const Index* scatter, const Points& x, Index begin,
-                Index end, VectorX* g, BlockSparseMatrix* H) {
+                Index end, VectorX* g, BlockSparseMatrix* H, bool project) {
   using V = Lanes<kLanes>;
   TetBatch<V> batch;
   double energy = 0;
@@ -82,7 +91,10 @@ double run_rows(const M& m, const TetBlock& b, const Index* scatter, const Point
     }
     tet_batch<kOrder>(m, tet_batch_input<V, M::kUsesFiber>(b, x, e), batch);
     add_energy_gradient<kOrder>(batch, b, e, energy, g);
-    if constexpr (kOrder >= 2) add_hessian(batch, scatter + 16 * e, *H);
+    if constexpr (kOrder >= 2) {
+      if (project) project_batch(batch);
+      add_hessian(batch, scatter + 16 * e, *H);
+    }
   }
   TetLocal local;
   for (; e < end; ++e) {
@@ -92,7 +104,10 @@ double run_rows(const M& m, const TetBlock& b, const Index* scatter, const Point
     if constexpr (kOrder >= 1) {
       for (int a = 0; a < 4; ++a) g->segment<3>(3 * b.nodes(e, a)) += local.gradient.col(a);
     }
-    if constexpr (kOrder >= 2) H->add_blocks<4>(scatter + 16 * e, local.hessian);
+    if constexpr (kOrder >= 2) {
+      if (project) project_to_psd(local.hessian);
+      H->add_blocks<4>(scatter + 16 * e, local.hessian);
+    }
   }
   return energy;
 }
@@ -100,15 +115,18 @@ double run_rows(const M& m, const TetBlock& b, const Index* scatter, const Point
 // The chunks of a block color by color (run_by_color: deterministic for any number of threads).
 template <int kOrder, class M>
 double run_group(const M& m, const TetBlock& b, const Index* scatter, const Points& x, VectorX* g,
-                 BlockSparseMatrix* H) {
+                 BlockSparseMatrix* H, bool project) {
   return run_by_color(b.color_begin, 0.0, [&](Index k) {
-    return run_rows<kOrder>(m, b, scatter, x, b.chunk_begin[k], b.chunk_begin[k + 1], g, H);
+    return run_rows<kOrder>(m, b, scatter, x, b.chunk_begin[k], b.chunk_begin[k + 1], g, H,
+                            project);
   });
 }
 
 }  // namespace
 
-Elasticity::Elasticity(const Points& X, const TetIndices& tets, std::vector<ElasticGroup> groups) {
+Elasticity::Elasticity(const Points& X, const TetIndices& tets, std::vector<ElasticGroup> groups,
+                       const ElasticityOptions& options)
+    : options_(options) {
   for (size_t i = 0; i < groups.size(); ++i) {
     ElasticGroup& in = groups[i];
     try {
@@ -156,9 +174,11 @@ double Elasticity::evaluate(const Points& x, VectorX* gradient, BlockSparseMatri
       throw std::logic_error("elasticity: bind() the Hessian first");
     total += std::visit(
         [&](const auto& m) {
-          if (hessian) return run_group<2>(m, grp.block, grp.scatter.data(), x, gradient, hessian);
-          if (gradient) return run_group<1>(m, grp.block, nullptr, x, gradient, nullptr);
-          return run_group<0>(m, grp.block, nullptr, x, nullptr, nullptr);
+          if (hessian)
+            return run_group<2>(m, grp.block, grp.scatter.data(), x, gradient, hessian,
+                                options_.project_hessian);
+          if (gradient) return run_group<1>(m, grp.block, nullptr, x, gradient, nullptr, false);
+          return run_group<0>(m, grp.block, nullptr, x, nullptr, nullptr, false);
         },
         grp.material);
   }

@@ -16,6 +16,14 @@ struct ElasticGroup {
   Points fibers;            ///< #tets x 3 or empty
 };
 
+/// Options of the elastic force module.
+struct ElasticityOptions {
+  /// Project each tet's 12x12 Hessian onto the positive semi-definite matrices before it is
+  /// added (psd_projection.hpp): the assembled Hessian is then positive semi-definite however the
+  /// elements are compressed, at the price of one 12x12 eigen-decomposition per tet.
+  bool project_hessian = false;
+};
+
 /// Sum over groups of V psi(F) per tet. Each group's data is a color-ordered TetBlock, and the
 /// kernel is instantiated per material type: one std::visit per group, none per element. A chunk
 /// goes through the batched kernel (batched_tet_kernel.hpp) kLanes rows at a time, the rows left
@@ -25,7 +33,8 @@ struct ElasticGroup {
 class Elasticity final : public ForceModule {
  public:
   /// Validates each group's material and builds its block from the reference positions X.
-  Elasticity(const Points& X, const TetIndices& tets, std::vector<ElasticGroup> groups);
+  Elasticity(const Points& X, const TetIndices& tets, std::vector<ElasticGroup> groups,
+             const ElasticityOptions& options = {});
 
   std::string name() const override { return "elasticity"; }
   void add_couplings(SparsityBuilder& builder) const override;
@@ -46,6 +55,7 @@ class Elasticity final : public ForceModule {
     std::vector<Index> scatter;  ///< 16 block indices per row: (a, b) at 16 e + 4 a + b
   };
   std::vector<Group> groups_;
+  ElasticityOptions options_;
 };
 
 }  // namespace depthfem

@@ -43,7 +43,7 @@ struct LinearSolveStats {
   int iterations = 0;              ///< iterative: matrix products; direct: 1
   double relative_residual = 0;    ///< |b - A x| / |b|
   bool reached_tolerance = false;  ///< iterative: tolerance met; direct: factorisation succeeded
-  double shift = 0;                ///< direct: s of the factored A + s I (A indefinite)
+  double shift = 0;                ///< direct: s of the factored A + s diag|A| (A indefinite)
 };
 
 /// Solves A x = b with the chosen method (see DirectSolver and AmgSolver). kAuto decides on the

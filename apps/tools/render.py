@@ -229,12 +229,12 @@ def render(path, out, step=None, view=(25.0, -60.0), color="displacement", refer
     save_figure(fig, out, [axis.label for axis in (ax.xaxis, ax.yaxis, ax.zaxis)])
 
 
-def save_figure(fig, out, extra_artists=()):
-    """Writes the figure as a 150 dpi PNG, trimmed to its content and `extra_artists` (which the
+def save_figure(fig, out, extra_artists=(), dpi=150):
+    """Writes the figure as a PNG (150 dpi unless told), trimmed to its content and `extra_artists` (which the
     trimming would miss, such as the axis labels of a 3D plot), and closes it; ToolError if it
     cannot be written."""
     try:
-        fig.savefig(out, dpi=150, bbox_inches="tight", bbox_extra_artists=list(extra_artists))
+        fig.savefig(out, dpi=dpi, bbox_inches="tight", bbox_extra_artists=list(extra_artists))
     except OSError as error:
         raise ToolError(f"{out}: cannot write ({error.strerror})") from None
     plt.close(fig)

@@ -55,8 +55,10 @@ TEST(LinearSolvers, AmgAndDirectAgreeOnTheStaticScenes) {
     // Two runs converged to the relative Newton tolerance of 1e-9 differ by the residual over
     // the smallest stiffness: measured at most 8e-7 of the largest displacement (ball_drop,
     // whose resting ball is held by a soft floor penalty); another equilibrium differs by a
-    // sizeable fraction of it (the buckled columns: 140 %).
-    EXPECT_EQ(r[0].steps.size(), r[1].steps.size()) << c.scene;
+    // sizeable fraction of it (the buckled columns: 140 %). The increments may differ where a
+    // step needs nearly the Newton limit (fold_slab: load 0.7 to 0.8 takes 27 iterations with
+    // AMG, more than 30 with the direct solver, which cuts it into two); the equilibria at the
+    // loads both reach agree (fold_slab: energies equal to seven digits at each of them).
     EXPECT_LE(apart, 1e-5 * moved) << c.scene;
   }
 }

@@ -200,6 +200,16 @@ TEST_F(SceneFileTest, OverridesReachNestedKeys) {
   }
 }
 
+// The Hessian projection is off unless the solver section asks for it, and takes only a boolean.
+TEST_F(SceneFileTest, HessianProjectionIsASolverSwitch) {
+  EXPECT_FALSE(load_scene(write(kValid)).elasticity.project_hessian);
+  EXPECT_TRUE(load_scene(write(kValid), {parse_override("solver.hessian_projection=true")})
+                  .elasticity.project_hessian);
+  EXPECT_NE(error(kValid, {parse_override("solver.hessian_projection=1")})
+                .find("solver.hessian_projection: expected true or false"),
+            std::string::npos);
+}
+
 // Every integer is read in 64 bits and refused, with its key, when it does not fit.
 TEST_F(SceneFileTest, IntegersAboveTwoToThe31AreRefusedNotTruncated) {
   EXPECT_NE(error(replaced(kValid, "\"cells\": [1,1,1]", "\"cells\": [4294967336,1,1]"))

@@ -91,9 +91,14 @@ TEST(LinearSolver, DirectSolvesIndefiniteSystemsExactlyWithLdlt) {
   EXPECT_LE(residual(p.A, x, p.b), 1e-8);
 }
 
+// D = diag|A|: the weights of the shifted fallback A + s D.
+VectorX shift_weights(const BlockSparseMatrix& A) {
+  return A.diagonal().cwiseAbs();
+}
+
 TEST(LinearSolver, DirectShiftsIndefiniteSystemsToADescentDirection) {
-  // The shifted fallback solves (A + s I) x = b with A + s I positive definite, so x is a
-  // descent direction for the quadratic with gradient -b: b.x = x^T (A + s I) x > 0.
+  // The shifted fallback solves (A + s D) x = b with A + s D positive definite, so x is a
+  // descent direction for the quadratic with gradient -b: b.x = x^T (A + s D) x > 0.
   const Problem p = clamped_block(2e3);
   LinearSolver direct({LinearSolverKind::kDirect});
   ASSERT_EQ(direct.options().direct.indefinite, IndefiniteFallback::kShift);
@@ -103,14 +108,41 @@ TEST(LinearSolver, DirectShiftsIndefiniteSystemsToADescentDirection) {
   EXPECT_GT(p.b.dot(x), 0.0);
   VectorX Ax;
   p.A.multiply(x, Ax);
-  EXPECT_LE((p.b - Ax - st.shift * x).norm(), 1e-10 * p.b.norm());
-  // The shift is less than ten times the least that works: a tenth of it leaves A + s I
+  const VectorX D = shift_weights(p.A);
+  EXPECT_LE((p.b - Ax - st.shift * D.cwiseProduct(x)).norm(), 1e-10 * p.b.norm());
+  // The shift is less than ten times the least that works: a tenth of it leaves A + s D
   // indefinite.
   BlockSparseMatrix shifted = p.A;
   for (Index i = 0; i < shifted.num_nodes(); ++i)
-    shifted.block(shifted.block_index(i, i)).diagonal().array() += 0.1 * st.shift;
+    shifted.block(shifted.block_index(i, i)).diagonal() += 0.1 * st.shift * D.segment<3>(3 * i);
   LinearSolver probe({LinearSolverKind::kDirect});
   EXPECT_GT(probe.solve(shifted, p.b, x).shift, 0.0);
+}
+
+TEST(LinearSolver, DirectShiftIsInvariantUnderRescalingTheDofs) {
+  // A stiff region beside a soft one (a bone beside soft tissue, a penalty beside both): the
+  // congruence S A S with S = diag(1000 on half the nodes, 1 on the rest) has the same inertia,
+  // and with the shift weighted by the diagonal, (S A S + s S D S) y = S b is solved by
+  // y = S^-1 x with the same s. A shift s I would instead be set by the stiff half and freeze
+  // the soft one.
+  const Problem p = clamped_block(2e3);
+  VectorX scale = VectorX::Ones(p.b.size());
+  scale.head(p.b.size() / 2).setConstant(1e3);
+  BlockSparseMatrix scaled = p.A;
+  for (Index i = 0; i < scaled.num_nodes(); ++i)
+    for (Index k = scaled.row_begin(i); k < scaled.row_begin(i + 1); ++k) {
+      const Index j = scaled.block_col(k);
+      scaled.block(k) = scale.segment<3>(3 * i).asDiagonal() * scaled.block(k) *
+                        scale.segment<3>(3 * j).asDiagonal();
+    }
+  LinearSolver plain({LinearSolverKind::kDirect}), rescaled({LinearSolverKind::kDirect});
+  VectorX x, y;
+  const LinearSolveStats a = plain.solve(p.A, p.b, x);
+  const LinearSolveStats b = rescaled.solve(scaled, scale.cwiseProduct(p.b), y);
+  ASSERT_GT(a.shift, 0.0);
+  // The Lanczos estimate sees the same scaled matrix up to round-off.
+  EXPECT_NEAR(b.shift, a.shift, 1e-6 * a.shift);
+  EXPECT_LE((scale.cwiseProduct(y) - x).norm(), 1e-6 * x.norm());
 }
 
 // A chain of nodes coupled to the next (pattern 1) or to the one after next (pattern 2), both
