@@ -2,10 +2,19 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace depthfem {
 
 namespace {
+// A number in a message, to four significant digits at any scale (std::to_string would print
+// 1.8e-4 as 0.000180 and 1e-9 as 0.000000).
+std::string shown(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4g", value);
+  return text;
+}
+
 // Fraction of the largest legal step the line search starts from (the energy barrier is
 // infinite at the step itself).
 constexpr double kMaxStepFraction = 0.9;
@@ -69,8 +78,8 @@ NewtonResult NewtonSolver::solve(Points& x) {
     return result;
   }
   if (!(std::isfinite(options_.tolerance) && options_.tolerance > 0)) {
-    result.failure = "the Newton tolerance " + std::to_string(options_.tolerance) +
-                     " N is not a finite positive number";
+    result.failure =
+        "the Newton tolerance " + shown(options_.tolerance) + " is not a finite positive number";
     return result;
   }
   constraints_.project(g);
@@ -85,11 +94,10 @@ NewtonResult NewtonSolver::solve(Points& x) {
       return result;
     }
     if (result.iterations == options_.max_iterations) {
-      result.failure =
-          "no convergence in " + std::to_string(options_.max_iterations) +
-          " Newton iterations (residual " + std::to_string(residual) + " N, " +
-          (options_.force_scale.size() ? "scaled " + std::to_string(scaled) + ", " : "") +
-          "tolerance " + std::to_string(options_.tolerance) + ")";
+      result.failure = "no convergence in " + std::to_string(options_.max_iterations) +
+                       " Newton iterations (residual " + shown(residual) + " N, " +
+                       (options_.force_scale.size() ? "scaled " + shown(scaled) + ", " : "") +
+                       "tolerance " + shown(options_.tolerance) + ")";
       return result;
     }
     BlockSparseMatrix& H = system_.matrix();
@@ -120,8 +128,8 @@ NewtonResult NewtonSolver::solve(Points& x) {
     ++result.iterations;
     if (!accepted) {
       result.failure = std::string("line search found no legal step that lowers the ") +
-                       (energy_rule ? "energy" : "residual") + " (residual " +
-                       std::to_string(residual) + " N)";
+                       (energy_rule ? "energy" : "residual") + " (residual " + shown(residual) +
+                       " N)";
       return result;
     }
     energy = system_.hessian(x, g);
