@@ -97,22 +97,25 @@ LoadedMesh make_mesh(const MeshSpec& spec, const JsonObject& m) {
     LoadedMesh loaded = std::visit(
         [&](const auto& source) -> LoadedMesh {
           using S = std::decay_t<decltype(source)>;
+          LoadedMesh out;
           if constexpr (std::is_same_v<S, std::string>) {
-            if (spec.regions.empty()) return read_tet_mesh(source);
+            out = read_tet_mesh(source);
+            if (spec.regions.empty()) return out;
             try {
-              return select_regions(read_tet_mesh(source), spec.regions);
+              return select_regions(out, spec.regions);
             } catch (const InputError& e) {
               m.fail("regions", source + ": " + e.what());
             }
           } else if constexpr (std::is_same_v<S, BoxParams>) {
-            return {box_mesh(source)};
+            out.mesh = box_mesh(source);
           } else if constexpr (std::is_same_v<S, TubeParams>) {
-            return {tube_mesh(source)};
+            out.mesh = tube_mesh(source);
           } else if constexpr (std::is_same_v<S, BallParams>) {
-            return {ball_mesh(source)};
+            out.mesh = ball_mesh(source);
           } else {
-            return {corner_mesh(source)};
+            out.mesh = corner_mesh(source);
           }
+          return out;
         },
         spec.source);
     TetMesh& mesh = loaded.mesh;
@@ -120,7 +123,9 @@ LoadedMesh make_mesh(const MeshSpec& spec, const JsonObject& m) {
       // Scaling or moving far can underflow or overflow coordinates: check the mesh again.
       mesh.X *= spec.scale;
       mesh.X.rowwise() += spec.translate.transpose();
-      validate_and_orient(mesh, {"the scaled and translated mesh"});
+      MeshSource moved;
+      moved.file = "the scaled and translated mesh";
+      validate_and_orient(mesh, moved);
     }
     return loaded;
   } catch (const InputError& e) {

@@ -41,7 +41,9 @@ Points ImplicitStepper::initial_acceleration(const Points& x, const Points& v) {
   terms_.inertia->evaluate(x, nullptr, &M);
   constraints.project(M);
   VectorX a;
-  LinearSolver direct({.kind = LinearSolverKind::kDirect});
+  LinearSolverOptions direct_options;
+  direct_options.kind = LinearSolverKind::kDirect;
+  LinearSolver direct(direct_options);
   if (!direct.solve(M, -g, a).reached_tolerance || !a.allFinite())
     throw SolveError("the mass matrix is singular on the free directions");
   return as_points(a);
