@@ -143,7 +143,8 @@ RunResult run_restarted(const Scene& scene, const std::string& out, const std::s
 // turned 180 degrees in increments of 0.1, restarted at load 0.4 (step 3). Both solves stop at
 // the scene's tolerance, 1e-9 E h^2 per dof (rms), i.e. residual forces near 1e-9 E h^2 and,
 // through a stiffness of order E h per node, positions within about 1e-9 h = 5e-11 m of the
-// exact equilibrium; 1e-8 m leaves a factor 200 for the conditioning of the twisted bar.
+// exact equilibrium; 1e-8 m leaves a factor 200 for the conditioning of the twisted bar (measured:
+// 1.1e-16 m, both runs' last Newton iterations converging quadratically to round-off).
 TEST(RunScene, RestartedStaticRunEndsInTheSameState) {
   const Scene scene =
       load("twist_bar", {"solver.initial_increment=0.1", "solver.max_increment=0.1"});
