@@ -1,5 +1,6 @@
 // The depthfem command line:
 //   depthfem run SCENE.json --out RESULT.h5 [--threads N] [--set PATH=VALUE]...
+//                [--restart EARLIER.h5 [--step N]]
 //   depthfem info RESULT.h5
 // Exit code 0 only when the whole run succeeded; otherwise one line "depthfem: error: ..." on
 // stderr (2 for usage errors, 1 for input or solver errors).
@@ -19,6 +20,7 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: depthfem run SCENE.json --out RESULT.h5 [--threads N] [--set PATH=VALUE]...\n"
+    "                    [--restart EARLIER.h5 [--step N]]\n"
     "       depthfem info RESULT.h5\n";
 
 struct UsageError : std::runtime_error {
@@ -40,12 +42,14 @@ std::string one_line(const std::string& text) {
   return out;
 }
 
-// A strictly positive int, all of `text` ("3x" and "1e2" are refused).
-int positive_int(const std::string& text) {
+// An int of at least `least`, all of `text` ("3x" and "1e2" are refused), the value of `option`.
+int int_at_least(const std::string& option, const std::string& text, int least) {
   int value = 0;
   const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (ec != std::errc() || end != text.data() + text.size() || value < 1)
-    throw UsageError("--threads expects a positive integer, got '" + text + "'");
+  if (ec != std::errc() || end != text.data() + text.size() || value < least) {
+    throw UsageError(option + " expects " + (least == 1 ? "a positive" : "a non-negative") +
+                     " integer, got '" + text + "'");
+  }
   return value;
 }
 
@@ -63,7 +67,11 @@ int run(const std::vector<std::string>& args) {
     if (args[i] == "--out") {
       options.out = value();
     } else if (args[i] == "--threads") {
-      options.threads = positive_int(value());
+      options.threads = int_at_least("--threads", value(), 1);
+    } else if (args[i] == "--restart") {
+      options.restart = value();
+    } else if (args[i] == "--step") {
+      options.restart_step = int_at_least("--step", value(), 0);
     } else if (args[i] == "--set") {
       overrides.push_back(parse_override(value()));
     } else if (args[i].rfind("--", 0) == 0) {
@@ -76,6 +84,8 @@ int run(const std::vector<std::string>& args) {
   }
   if (scene_path.empty()) throw UsageError("run needs a scene file");
   if (options.out.empty()) throw UsageError("run needs --out RESULT.h5");
+  if (options.restart_step >= 0 && options.restart.empty())
+    throw UsageError("--step needs --restart EARLIER.h5");
   const ThreadBudget budget(options.threads);  // before anything runs (run_scene sets it too)
   const Scene scene = load_scene(scene_path, overrides);
   const RunResult r = run_scene(scene, options, std::cout);

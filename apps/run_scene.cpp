@@ -108,11 +108,39 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   const Mesh& mesh = scene.mesh;
   const DynamicOptions& dyn = model->dynamic_options;
 
+  // The starting state: the reference, or a completed step of an earlier run of this scene.
+  result.x = mesh.X;
+  double start_load = 0;
+  if (!options.restart.empty()) {
+    const auto refuse = [&](const std::string& why) {
+      throw InputError(located(options.restart, 0, "cannot restart from it: " + why));
+    };
+    if (scene.analysis != "static") refuse("restarts are for static analyses only");
+    const ResultsSummary previous = read_results_summary(options.restart);
+    if (previous.num_nodes != mesh.num_nodes() || previous.num_tets != mesh.num_tets()) {
+      refuse("it has " + std::to_string(previous.num_nodes) + " nodes and " +
+             std::to_string(previous.num_tets) + " tets, the scene " +
+             std::to_string(mesh.num_nodes()) + " and " + std::to_string(mesh.num_tets()));
+    }
+    const StepState state = read_step_state(options.restart, options.restart_step);
+    if (state.x.rows() != mesh.num_nodes() || !state.x.allFinite())
+      refuse("step " + std::to_string(state.index) + " has no finite #nodes x 3 positions");
+    if (!(state.load >= 0 && state.load <= 1))
+      refuse("step " + std::to_string(state.index) + " has load " + std::to_string(state.load) +
+             ", not a load factor in [0, 1]");
+    result.x = state.x;
+    start_load = state.load;
+    log << "restart from step " << state.index << " of " << options.restart << " at load "
+        << format("%.6g", start_load) << std::endl;
+  }
+
   // Open the results.
   std::unique_ptr<ResultsFile> file;
   const ResultFields fields = result_fields(scene);
   if (!options.out.empty()) {
-    refuse_overwriting_inputs(options.out, scene.inputs);
+    std::vector<std::string> inputs = scene.inputs;
+    if (!options.restart.empty()) inputs.push_back(options.restart);
+    refuse_overwriting_inputs(options.out, inputs);
     RunInfo info{scene.json_text,
                  kVersion,
                  scene.analysis,
@@ -158,10 +186,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     if (options.observer) options.observer(step, x);
   };
   StepLifecycle lifecycle(model->system, model->constraints, model->lifecycle_terms(), on_step);
-  result.x = mesh.X;
   try {
     if (scene.analysis == "static") {
-      StaticSolver(lifecycle, model->quasi_viscosity, model->static_options).run(result.x);
+      StaticSolver(lifecycle, model->quasi_viscosity, model->static_options)
+          .run(result.x, start_load);
     } else {
       Points v = scene.initial_velocity;
       switch (dyn.integrator) {

@@ -15,6 +15,10 @@ namespace depthfem {
 struct RunOptions {
   std::string out;  ///< results file (.h5); empty: no file
   int threads = 0;  ///< 0: all cores
+  /// Static analysis only: a results file of the same scene whose step `restart_step` (the last
+  /// one when < 0) is the starting state (positions and load factor); empty: start at rest.
+  std::string restart;
+  Index restart_step = -1;
   /// Called after every completed step with its record and positions (e.g. to sample a
   /// trajectory without writing a file).
   std::function<void(const StepRecord&, const Points& x)> observer;

@@ -10,6 +10,8 @@
 #   bench/knee_flexion.sh [SCENE.json [TAG [depthfem options...]]]
 #   bench/knee_flexion.sh                                  # apps/scenes/knee_flexion.json
 #   bench/knee_flexion.sh apps/scenes/knee_flexion_fine.json fine
+# KNEE_RESULTS=PATH.h5 keeps the results file there (for the figures, or a --restart from it);
+# without it the run writes into a temporary folder, removed at the end.
 set -euo pipefail
 scene=${1:-apps/scenes/knee_flexion.json}
 tag=${2:+_$2}
@@ -17,8 +19,9 @@ shift $(($# < 2 ? $# : 2))
 out=bench/results/knee_flexion$tag
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
+h5=${KNEE_RESULTS:-$tmp/run.h5}
 status=0
-build/apps/depthfem run "$scene" --out "$tmp/run.h5" "$@" > "$out.log" 2>&1 || status=$?
-sed -i "s|$tmp/run.h5|RUN.h5|g" "$out.log"  # the log names no temporary path
-/usr/bin/python3 bench/knee_report.py "$tmp/run.h5" "$out.log" "$out"
+build/apps/depthfem run "$scene" --out "$h5" "$@" > "$out.log" 2>&1 || status=$?
+sed -i "s|$h5|RUN.h5|g" "$out.log"  # the log names no path of this machine
+/usr/bin/python3 bench/knee_report.py "$h5" "$out.log" "$out"
 exit $status

@@ -449,4 +449,23 @@ Points read_step_positions(const std::string& path, Index step) {
   return x;
 }
 
+StepState read_step_state(const std::string& path, Index step) {
+  StepState out;
+  {
+    const H5File file = open_results(path);
+    const std::vector<std::string> steps =
+        file.exists("/steps") ? file.link_names("/steps") : std::vector<std::string>();
+    if (steps.empty()) file.fail("has no completed step to restart from");
+    out.index = step < 0 ? std::stoll(steps.back()) : step;
+    const std::string group = step_group(out.index);
+    if (!file.exists(group))
+      file.fail("has no step " + std::to_string(out.index) + " (steps " +
+                std::to_string(std::stoll(steps.front())) + " to " +
+                std::to_string(std::stoll(steps.back())) + ")");
+    out.load = file.attribute<double>(group, "load");
+  }
+  out.x = read_step_positions(path, out.index);
+  return out;
+}
+
 }  // namespace depthfem

@@ -107,4 +107,15 @@ Eigen::MatrixXd read_step_dataset(const std::string& path, Index step, const std
 /// Positions /steps/<step>/x (#nodes x 3 [m]); throws InputError naming file and step if absent.
 Points read_step_positions(const std::string& path, Index step);
 
+/// A completed step read back to restart a run from it.
+struct StepState {
+  Index index = 0;  ///< step index in the file
+  double load = 0;  ///< load factor (static) or time [s]
+  Points x;         ///< #nodes x 3 [m]
+};
+
+/// Step `step` of a results file, the last one when `step` < 0; throws InputError naming the
+/// file when it has no such step (or no steps at all).
+StepState read_step_state(const std::string& path, Index step = -1);
+
 }  // namespace depthfem

@@ -7,17 +7,17 @@
 
 namespace depthfem {
 
-void StaticSolver::run(Points& x) {
+void StaticSolver::run(Points& x, double start_load) {
   const Constraints& constraints = lifecycle_.constraints();
   System& system = lifecycle_.system();
   // Converged solutions at the last two load factors feed the predictor.
-  double load = 0, previous_load = 0;
+  double load = start_load, previous_load = start_load;
   Points previous = x;
   double increment = std::min(options_.initial_increment, options_.max_increment);
   // Load factors are base + k increment within a run of equal increments, so that ten steps of
   // 0.1 end exactly at 1 instead of accumulating round-off, rounded to the decimal they stand
   // for (0.44, not 0.44000000000000006).
-  double base = 0;
+  double base = start_load;
   int count = 0, successes = 0;
   std::string last_failure;
 

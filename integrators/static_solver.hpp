@@ -30,12 +30,13 @@ class StaticSolver {
         options_(options),
         newton_(lifecycle.system(), lifecycle.constraints(), options.newton) {}
 
-  /// Runs from x, completing every converged increment through the lifecycle. Load factors are
-  /// the start of the current run of equal increments plus a whole number of them, rounded to
-  /// the decimal they stand for (round_to_decimal), and the last one is exactly 1. Throws
-  /// SolveError when the increment falls below the minimum or settling does not finish; the steps
-  /// completed so far stay valid (x holds the last one).
-  void run(Points& x);
+  /// Runs from x, an equilibrium at load factor `start_load` in [0, 1] (0: the reference state;
+  /// more: a restart from a completed step), completing every converged increment through the
+  /// lifecycle. Load factors are the start of the current run of equal increments plus a whole
+  /// number of them, rounded to the decimal they stand for (round_to_decimal), and the last one
+  /// is exactly 1. Throws SolveError when the increment falls below the minimum or settling does
+  /// not finish; the steps completed so far stay valid (x holds the last one).
+  void run(Points& x, double start_load = 0);
 
  private:
   StepLifecycle& lifecycle_;

@@ -77,4 +77,17 @@ grep -q "busy.h5: is being written by another depthfem run (process $first)" "$t
 [ "$(wc -l < "$tmp/nl.log")" -eq 1 ] || fail "error over several lines: $(cat "$tmp/nl.log")"
 "$exe" run "$tmp/scene.json" --out "$tmp/y.h5" --threads 3x > /dev/null 2>&1
 [ $? -eq 2 ] || fail "--threads 3x must be a usage error"
+
+# A restart continues a static run from a step of its file: the uniaxial block from step 1 of
+# ok.h5 (load 0.5) needs two more steps; --step needs --restart, and a missing step is an error.
+"$exe" run "$src/apps/scenes/uniaxial_block.json" --out "$tmp/re.h5" --restart "$tmp/ok.h5" --step 1 \
+  > "$tmp/re.log" 2>&1 || fail "restart exited $?: $(cat "$tmp/re.log")"
+grep -q "^restart from step 1 of .* at load 0.5$" "$tmp/re.log" || fail "restart line: $(head -1 "$tmp/re.log")"
+"$exe" info "$tmp/re.h5" | grep -q "steps: 2, last load/time 1," || fail "restart did not end at load 1 in two steps"
+"$exe" run "$src/apps/scenes/uniaxial_block.json" --out "$tmp/re2.h5" --step 1 > /dev/null 2>&1
+[ $? -eq 2 ] || fail "--step without --restart must be a usage error"
+"$exe" run "$src/apps/scenes/uniaxial_block.json" --out "$tmp/re2.h5" --restart "$tmp/ok.h5" --step 9 \
+  > /dev/null 2> "$tmp/re2.err"
+[ $? -eq 1 ] && [ "$(wc -l < "$tmp/re2.err")" -eq 1 ] || fail "missing step: $(cat "$tmp/re2.err")"
+grep -q "has no step 9" "$tmp/re2.err" || fail "missing step message: $(cat "$tmp/re2.err")"
 echo "cli: all checks passed"
