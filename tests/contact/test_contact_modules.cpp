@@ -61,8 +61,6 @@ auto module_gradient(ForceModule& module) {
   };
 }
 
-// Two boxes overlapping by a third of the upper one's height, with self-contact on; random
-// perturbations make every clip case appear. Finite differences re-run the pair search.
 // A box resting on a wider one: the faces touch with zero depth, which is no contact area.
 // Pressed 1 mm in, the upper box's bottom face (0.4 x 0.4 m, at least a cell from the lower box's
 // sides, so inside tets with positive depth) counts in full; the lower box's top face inside the
@@ -93,6 +91,8 @@ TEST(MaterialDepthContact, TouchingAtRestIsNoContactArea) {
   EXPECT_LE(step.contact_area(), 0.32 + 1e-9);
 }
 
+// Two boxes overlapping by a third of the upper one's height, with self-contact on; random
+// perturbations make every clip case appear. Finite differences re-run the pair search.
 TEST(MaterialDepthContact, AssembledDerivativesMatchFiniteDifferences) {
   Mesh m;
   m.add_body("low", box_mesh({Vec3(0, 0, 0), Vec3(1, 1, 0.4), Eigen::Vector3i(4, 4, 2)}));
