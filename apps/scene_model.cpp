@@ -91,7 +91,8 @@ std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers)
   model->static_options = scene.static_options;
   set_newton_tolerance(scene, model->static_options.newton);
   model->dynamic_options = scene.dynamic_options;
-  set_newton_tolerance(scene, model->dynamic_options.newton);
+  model->dynamic_options.newton.tolerance = model->static_options.newton.tolerance;
+  model->dynamic_options.newton.force_scale = model->static_options.newton.force_scale;
   return model;
 }
 
