@@ -2,7 +2,8 @@
 // appended as a CSV row (run each case in its own process, so that the peak memory is its own;
 // bench/scaling.sh runs the whole study).
 //
-//   build/bench/bench_scaling --scene cantilever|sliding|hertz --size S --solver auto|direct|amg
+//   build/bench/bench_scaling --scene cantilever|sliding|hertz|knee --size S
+//       --solver auto|direct|amg
 //       [--threads N] [--ordering best|amd|metis] [--indefinite shift|ldlt] [--reuse TOL]
 //       [--out bench/results/scaling.csv] [--set PATH=VALUE ...]
 //
@@ -13,6 +14,8 @@
 // --reuse sets DirectSolverOptions::reuse_tolerance (0: factor every matrix).
 // hertz: the first increment of hertz_sphere alone (the sphere pushed 1 mm into the undeformed
 //   block: an indefinite Hessian at first), S core cells per edge (12: the shipped mesh).
+// knee: the first 3 degrees of knee_flexion in one increment (contact makes the Hessian
+//   indefinite after the first Newton step), on the shipped mesh whatever S.
 // Per Newton iteration: wall time of the steps (failed attempts included), of the linear solve
 // alone, of force/stiffness, and the CPU time of the run (all threads; less sensitive than wall
 // time to other jobs on a shared machine). Peak memory is the process's maximum resident set.
@@ -54,8 +57,12 @@ std::pair<std::string, std::vector<std::string>> scene_case(const std::string& n
         "hertz_sphere",
         {"bodies.0.mesh.core_cells=" + std::to_string(std::lround(S)),
          "obstacles.0.motion=[0,0,0.001]", "solver.initial_increment=1", "solver.max_increment=1"}};
+  if (name == "knee")  // the shipped mesh only: S is ignored
+    return {"knee_flexion",
+            {"boundary.0.angle_deg=3", "boundary.1.angle_deg=3", "solver.initial_increment=1",
+             "solver.max_increment=1"}};
   throw std::invalid_argument("unknown scene '" + name +
-                              "' (expected cantilever, sliding or hertz)");
+                              "' (expected cantilever, sliding, hertz or knee)");
 }
 
 // User and system time of the whole process so far [s].
@@ -100,7 +107,7 @@ int main(int argc, char** argv) {
     } else if (a == "--set" && has_value) {
       extra.push_back(argv[++i]);
     } else {
-      std::cerr << "usage: bench_scaling --scene cantilever|sliding|hertz --size S --solver "
+      std::cerr << "usage: bench_scaling --scene cantilever|sliding|hertz|knee --size S --solver "
                    "auto|direct|amg [--threads N] [--ordering best|amd|metis] [--indefinite "
                    "shift|ldlt] [--reuse TOL] [--out FILE.csv] [--set PATH=VALUE ...]\n";
       return 2;
