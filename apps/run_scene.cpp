@@ -1,11 +1,13 @@
 #include "apps/run_scene.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <new>
+#include <utility>
 
 #include "apps/scene_model.hpp"
 #include "contact/penetration_depth.hpp"
@@ -40,17 +42,31 @@ ResultFields result_fields(const Scene& scene) {
   return fields;
 }
 
-/// Per body: the names of its materials ("rigid" for a rigid body).
-std::vector<std::string> body_materials(const Scene& scene) {
-  std::vector<std::string> out(scene.mesh.bodies.size());
+/// The names of the materials of each body, and of each element region of each body (regions
+/// body after body, as RunInfo::region_materials); "rigid" for a rigid body and its regions.
+struct MaterialNames {
+  std::vector<std::string> bodies, regions;
+};
+MaterialNames material_names(const Scene& scene) {
+  MaterialNames out;
+  out.bodies.resize(scene.mesh.bodies.size());
   for (const ElasticGroup& g : scene.groups) {
     if (g.tets.empty()) continue;
-    std::string& names = out[static_cast<size_t>(scene.mesh.tet_body(g.tets.front()))];
+    std::string& names = out.bodies[static_cast<size_t>(scene.mesh.tet_body(g.tets.front()))];
     const std::string name = material_name(g.material);
     if (names.find(name) == std::string::npos) names += (names.empty() ? "" : ", ") + name;
   }
-  for (size_t b = 0; b < out.size(); ++b)
-    if (scene.rigid[b]) out[b] = "rigid";
+  for (size_t b = 0; b < out.bodies.size(); ++b) {
+    if (scene.rigid[b]) out.bodies[b] = "rigid";
+    for (const Region& r : scene.mesh.bodies[b].regions) {
+      const auto group = std::ranges::find_if(scene.groups, [&](const ElasticGroup& g) {
+        return std::ranges::find(g.tets, r.first_tet) != g.tets.end();
+      });
+      out.regions.push_back(scene.rigid[b]                ? "rigid"
+                            : group != scene.groups.end() ? material_name(group->material)
+                                                          : "");
+    }
+  }
   return out;
 }
 
@@ -141,12 +157,14 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     std::vector<std::string> inputs = scene.inputs;
     if (!options.restart.empty()) inputs.push_back(options.restart);
     refuse_overwriting_inputs(options.out, inputs);
+    MaterialNames materials = material_names(scene);
     RunInfo info{scene.json_text,
                  kVersion,
                  scene.analysis,
                  threads,
                  {},
-                 body_materials(scene),
+                 std::move(materials.bodies),
+                 std::move(materials.regions),
                  fields,
                  fields.velocity ? scene.initial_velocity : Points()};
     for (const Constraint& c : scene.constraints) info.constraint_names.push_back(c.name);

@@ -745,7 +745,8 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
   std::vector<Vec3> velocity;
   for (const BodySpec& b : bodies) {
     const LoadedMesh loaded = make_mesh(b.mesh, b.mesh_where);
-    const Index id = scene.mesh.add_body(b.name, loaded.mesh, loaded.node_sets);
+    const Index id = scene.mesh.add_body(b.name, loaded.mesh, loaded.node_sets, loaded.region_names,
+                                         loaded.tet_region);
     const Body& body = scene.mesh.bodies[id];
     scene.rigid.push_back(b.rigid);
     if (b.rigid) {
@@ -755,11 +756,15 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
       scene.constraints.push_back({b.name + "_rigid", nodes, Fixed{}});
     } else {
       for (const BodyMaterial& m : region_materials_checked(b.materials, loaded, b.where)) {
-        const auto region = std::ranges::find(loaded.region_names, m.region);
+        // The whole body, or the region's range of its tets (add_body grouped them by region;
+        // a region without tets has none).
+        Region tets{"", body.first_tet, body.num_tets};
+        if (!m.region.empty()) {
+          const auto it = std::ranges::find(body.regions, m.region, &Region::name);
+          tets = it != body.regions.end() ? *it : Region{};
+        }
         ElasticGroup g{m.model, {}, Points()};
-        for (Index t = 0; t < body.num_tets; ++t)
-          if (m.region.empty() || loaded.region_names.begin() + loaded.tet_region[t] == region)
-            g.tets.push_back(body.first_tet + t);
+        for (Index t = 0; t < tets.num_tets; ++t) g.tets.push_back(tets.first_tet + t);
         if (material_uses_fiber(g.material))
           g.fibers = m.fiber.transpose().replicate(static_cast<Index>(g.tets.size()), 1);
         scene.groups.push_back(std::move(g));

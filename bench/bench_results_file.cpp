@@ -81,7 +81,7 @@ enum Fields { kPositions, kDisplacement, kContact, kStressStrain };
 void BM_AppendStep(benchmark::State& state) {
   const Box& b = box();
   const auto fields = static_cast<Fields>(state.range(0));
-  RunInfo info{"{}", "bench", "static", 1, {"clamp"}, {"mooney_rivlin"}, {}, {}};
+  RunInfo info{"{}", "bench", "static", 1, {"clamp"}, {"mooney_rivlin"}, {}, {}, {}};
   info.fields.displacement = fields == kDisplacement;
   info.fields.contact = fields == kContact;
   info.fields.stress = info.fields.strain = fields == kStressStrain;
@@ -136,7 +136,7 @@ void BM_LongRun(benchmark::State& state) {
   Mesh mesh;
   mesh.add_body("a", box_mesh({Vec3::Zero(), Vec3(2, 1, 1), Eigen::Vector3i(4, 2, 2)}));
   mesh.add_body("b", box_mesh({Vec3(3, 0, 0), Vec3(5, 1, 1), Eigen::Vector3i(4, 2, 2)}));
-  RunInfo info{"{}", "bench", "dynamic", 1, {"clamp"}, {"neo_hookean", "neo_hookean"}, {}, {}};
+  RunInfo info{"{}", "bench", "dynamic", 1, {"clamp"}, {"neo_hookean", "neo_hookean"}, {}, {}, {}};
   info.fields.velocity = true;
   info.initial_velocity = Points::Zero(mesh.num_nodes(), 3);
   const auto mean_ms = [](const std::vector<double>& t, size_t from) {
@@ -161,7 +161,7 @@ void BM_LongRun(benchmark::State& state) {
       const fs::path xmf = fs::path(scratch.path).replace_extension(".xmf");
       SidecarLayout layout{
           "run.h5",        mesh.num_nodes(),
-          mesh.num_tris(), {{"a", "blocks/0/", 45, 96}, {"b", "blocks/1/", 45, 96}},
+          mesh.num_tris(), {{"a", "blocks/0/", 45, 96, 0, 0}, {"b", "blocks/1/", 45, 96, 45, 96}},
           false,           info.fields};
       XdmfSidecar file(xmf.string(), layout, {"/reference", 0.0, {}});
       std::vector<StepValue> values(16, {"energy", {1.0}});

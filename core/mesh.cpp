@@ -1,5 +1,7 @@
 #include "core/mesh.hpp"
 
+#include <stdexcept>
+
 #include "core/boundary.hpp"
 
 namespace depthfem {
@@ -13,7 +15,9 @@ void append_rows(M& dst, const M& src) {
 }
 }  // namespace
 
-Index Mesh::add_body(const std::string& name, const TetMesh& body, const NodeSets& sets) {
+Index Mesh::add_body(const std::string& name, const TetMesh& body, const NodeSets& sets,
+                     const std::vector<std::string>& region_names,
+                     const std::vector<Index>& tet_region) {
   Body b;
   b.name = name;
   b.first_node = num_nodes();
@@ -21,12 +25,37 @@ Index Mesh::add_body(const std::string& name, const TetMesh& body, const NodeSet
   b.first_tet = num_tets();
   b.num_tets = static_cast<Index>(body.tets.rows());
   b.first_tri = num_tris();
-  const BoundaryFaces faces = boundary_faces(body.tets);
+
+  // Regions in the order of their first tets; then each tet goes to the next row of its region
+  // (a counting sort, stable).
+  const Index num_regions = static_cast<Index>(region_names.size());
+  if (!tet_region.empty() && static_cast<Index>(tet_region.size()) != b.num_tets)
+    throw std::invalid_argument("body '" + name + "': " + std::to_string(tet_region.size()) +
+                                " tet regions for " + std::to_string(b.num_tets) + " tets");
+  std::vector<Index> order, count(static_cast<size_t>(num_regions), 0);
+  for (const Index r : tet_region) {
+    if (r < 0 || r >= num_regions)
+      throw std::invalid_argument("body '" + name + "': tet region " + std::to_string(r) +
+                                  " is not one of its " + std::to_string(num_regions) + " regions");
+    if (count[r]++ == 0) order.push_back(r);
+  }
+  TetIndices grouped = body.tets;
+  std::vector<Index> next_row(static_cast<size_t>(num_regions), 0);
+  Index first = 0;
+  for (const Index r : order) {
+    b.regions.push_back({region_names[r], b.first_tet + first, count[r]});
+    next_row[r] = first;
+    first += count[r];
+  }
+  for (Index t = 0; t < static_cast<Index>(tet_region.size()); ++t)
+    grouped.row(next_row[tet_region[t]]++) = body.tets.row(t);
+
+  const BoundaryFaces faces = boundary_faces(grouped);
   b.num_tris = static_cast<Index>(faces.tris.rows());
   const Index id = static_cast<Index>(bodies.size());
 
   append_rows(X, body.X);
-  append_rows(tets, TetIndices(body.tets.array() + b.first_node));
+  append_rows(tets, TetIndices(grouped.array() + b.first_node));
   append_rows(tris, TriIndices(faces.tris.array() + b.first_node));
   append_rows(tri_tet, IndexVector(faces.tet.array() + b.first_tet));
   append_rows(tet_body, IndexVector(IndexVector::Constant(b.num_tets, id)));

@@ -40,19 +40,33 @@ std::string step_group(Index index) {
 constexpr const char* kNodeDatasets[] = {"x", "displacement", "v"};
 constexpr const char* kTetDatasets[] = {"stress", "von_mises", "strain", "volume_ratio"};
 
-/// The sidecar's blocks: the whole mesh when it has one body (its datasets are the scene's),
-/// else one per body with its own views. Regions of a body (once meshes carry them) would add a
-/// block each here, with the body's nodes and the region's range of tets.
-std::vector<SidecarBlock> sidecar_blocks(const Mesh& mesh,
-                                         const std::vector<std::string>& materials) {
+/// The sidecar's blocks: one per body, named after it and its materials, except that a body with
+/// several element regions has one per region, named "BODY/REGION (material)", with the body's
+/// nodes and the region's tets. A single block is the whole mesh (it uses the scene's datasets);
+/// several have their own views.
+std::vector<SidecarBlock> sidecar_blocks(const Mesh& mesh, const RunInfo& info) {
+  const auto named = [](const std::string& name, const std::vector<std::string>& materials,
+                        size_t k) {
+    return k < materials.size() ? name + " (" + materials[k] + ")" : name;
+  };
   std::vector<SidecarBlock> blocks;
+  size_t region = 0;  // index of the body's first region among the regions of all bodies
   for (size_t b = 0; b < mesh.bodies.size(); ++b) {
     const Body& body = mesh.bodies[b];
-    const std::string name =
-        b < materials.size() ? body.name + " (" + materials[b] + ")" : body.name;
-    const std::string path = mesh.bodies.size() == 1 ? "" : "blocks/" + std::to_string(b) + "/";
-    blocks.push_back({name, path, body.num_nodes, body.num_tets});
+    if (body.regions.size() < 2) {
+      blocks.push_back({named(body.name, info.body_materials, b), "", body.num_nodes, body.num_tets,
+                        body.first_node, body.first_tet});
+    } else {
+      for (size_t r = 0; r < body.regions.size(); ++r) {
+        const Region& here = body.regions[r];
+        blocks.push_back({named(body.name + "/" + here.name, info.region_materials, region + r), "",
+                          body.num_nodes, here.num_tets, body.first_node, here.first_tet});
+      }
+    }
+    region += body.regions.size();
   }
+  if (blocks.size() > 1)
+    for (size_t k = 0; k < blocks.size(); ++k) blocks[k].path = "blocks/" + std::to_string(k) + "/";
   return blocks;
 }
 
@@ -154,7 +168,6 @@ struct ResultsFile::State {
   Points X;  ///< reference positions, for displacements
   Index num_tets = 0;
   TriIndices tris;
-  std::vector<Body> bodies;
   RunInfo info;
   std::vector<SidecarBlock> blocks;
   std::optional<XdmfSidecar> sidecar;
@@ -171,15 +184,15 @@ struct ResultsFile::State {
     for (size_t b = 0; b < blocks.size(); ++b) {
       const std::string here = group + "/" + blocks[b].path;
       file.create_group(here.substr(0, here.size() - 1));
-      const Body& body = bodies[b];
+      const SidecarBlock& block = blocks[b];
       for (const char* name : kNodeDatasets)
         if (file.exists(group + "/" + name))
-          file.create_row_view(here + name, group + "/" + name, hsize_t(body.first_node),
-                               hsize_t(body.num_nodes));
+          file.create_row_view(here + name, group + "/" + name, hsize_t(block.first_node),
+                               hsize_t(block.num_nodes));
       for (const char* name : kTetDatasets)
         if (file.exists(group + "/" + name))
-          file.create_row_view(here + name, group + "/" + name, hsize_t(body.first_tet),
-                               hsize_t(body.num_tets));
+          file.create_row_view(here + name, group + "/" + name, hsize_t(block.first_tet),
+                               hsize_t(block.num_tets));
     }
   }
 };
@@ -204,9 +217,8 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
                                          mesh.X,
                                          mesh.num_tets(),
                                          mesh.tris,
-                                         mesh.bodies,
                                          info,
-                                         sidecar_blocks(mesh, info.body_materials),
+                                         sidecar_blocks(mesh, info),
                                          {},
                                          0,
                                          0,
@@ -227,6 +239,17 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
   for (const Body& body : mesh.bodies) body_names.push_back(body.name);
   f.write_strings("/mesh/body_names", body_names);
   f.write_strings("/mesh/body_materials", info.body_materials);
+  IndexVector tet_region = IndexVector::Constant(mesh.num_tets(), -1);
+  std::vector<std::string> region_names;
+  for (const Body& body : mesh.bodies) {
+    for (const Region& r : body.regions) {
+      tet_region.segment(r.first_tet, r.num_tets).setConstant(Index(region_names.size()));
+      region_names.push_back(r.name);
+    }
+  }
+  f.write_array("/mesh/tet_region", tet_region);
+  f.write_strings("/mesh/region_names", region_names);
+  f.write_strings("/mesh/region_materials", info.region_materials);
   if (!mesh.node_sets.empty()) {
     f.create_group("/mesh/node_sets");
     for (const auto& [name, nodes] : mesh.node_sets) {
@@ -238,16 +261,17 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
   }
   if (s.blocks.size() > 1) {
     f.create_group("/mesh/blocks");
-    for (size_t b = 0; b < s.blocks.size(); ++b) {
-      const Body& body = mesh.bodies[b];
-      const std::string here = "/mesh/" + s.blocks[b].path;
+    for (const SidecarBlock& block : s.blocks) {
+      const std::string here = "/mesh/" + block.path;
       f.create_group(here.substr(0, here.size() - 1));
+      f.set_string_attribute(here.substr(0, here.size() - 1), "name", block.name);
       const TetIndices local =
-          (mesh.tets.middleRows(body.first_tet, body.num_tets).array() - body.first_node).matrix();
+          (mesh.tets.middleRows(block.first_tet, block.num_tets).array() - block.first_node)
+              .matrix();
       f.write_array(here + "tets", local);
       if (depth.size() != 0)
-        f.create_row_view(here + "depth", "/mesh/depth", hsize_t(body.first_node),
-                          hsize_t(body.num_nodes));
+        f.create_row_view(here + "depth", "/mesh/depth", hsize_t(block.first_node),
+                          hsize_t(block.num_nodes));
     }
   }
 

@@ -4,10 +4,11 @@
 /// tests and the tools need. apps/README.md documents every dataset (name, shape, units).
 ///
 /// Layout (datasets row-major; strings variable-length UTF-8):
-///   /mesh: X, tets, tris, tet_body, tri_body, tri_tet, body_names, body_materials, depth (with
-///   material-depth contact only), node_sets/NAME (named node sets of the meshes, '/' in NAME
-///   written '_'); with several bodies also blocks/<b>/tets (body-local node
-///   indices) and blocks/<b>/depth (a view);
+///   /mesh: X, tets, tris, tet_body, tri_body, tri_tet, body_names, body_materials, tet_region,
+///   region_names, region_materials (the element regions of all bodies, body after body), depth
+///   (with material-depth contact only), node_sets/NAME (named node sets of the meshes, '/' in
+///   NAME written '_'); with several sidecar blocks also blocks/<k>/tets (body-local node
+///   indices) and blocks/<k>/depth (a view);
 ///   /run attributes scene, version, threads, analysis, status ("running", "completed",
 ///   "failed"), message; datasets constraint_names, contact_names (with the first step);
 ///   /reference: the state before the first step, laid out like a step (x, and the fields the
@@ -17,10 +18,12 @@
 ///   contact), penetration (with material-depth contact); datasets x, displacement, v, residuals,
 ///   reactions, contact_forces, contact_force_magnitudes, contact_areas, stress, von_mises, strain,
 ///   volume_ratio, contact_pressure, contact_traction, contact_gap, contact_fraction (those the run
-///   writes); with several bodies, blocks/<b>/ row views of the node and tet datasets; /timing
-///   attributes, one f64 [s] per phase, in the order given.
-/// Views are HDF5 virtual datasets of rows of this file: they let the sidecar give every body
-/// its own grid, which ParaView's XDMF readers cannot cut out of the scene-wide arrays. The
+///   writes); with several sidecar blocks, blocks/<k>/ row views of the node and tet datasets;
+///   /timing attributes, one f64 [s] per phase, in the order given.
+/// The sidecar's blocks: one per body, except that a body with several element regions has one
+/// per region (the body's nodes, the region's tets). Views are HDF5 virtual datasets of rows of
+/// this file: they let the sidecar give every block its own grid, which ParaView's XDMF readers
+/// cannot cut out of the scene-wide arrays. The
 /// sidecar's time of a step is its load (time-dependent runs: its time); ParaView shows one
 /// state per distinct time, so the settling steps of a static run, all at load 1, get times
 /// 2, 3, ...
@@ -47,8 +50,11 @@ struct RunInfo {
   int threads = 1;                            ///< worker threads of the run
   std::vector<std::string> constraint_names;  ///< one per boundary condition, the reaction rows
   std::vector<std::string> body_materials;    ///< per body: material model name or "rigid"
-  ResultFields fields;                        ///< the per-step fields every step will hold
-  Points initial_velocity;                    ///< #nodes x 3 [m/s], when fields.velocity
+  /// Per element region of the mesh (Body::regions, body after body): its material model name
+  /// or "rigid".
+  std::vector<std::string> region_materials;
+  ResultFields fields;      ///< the per-step fields every step will hold
+  Points initial_velocity;  ///< #nodes x 3 [m/s], when fields.velocity
 };
 
 /// Writes a results file. Every call leaves the file flushed and complete up to that call, so a

@@ -1,7 +1,8 @@
 #pragma once
 /// The XDMF sidecar of a results file: the XML through which ParaView reads the HDF5 datasets
-/// as a time series of multiblock data sets (one tetrahedral block per body, plus the boundary
-/// surface), written step by step at a cost per step that does not grow with the run.
+/// as a time series of multiblock data sets (one tetrahedral block per body, or per element
+/// region of a body with several, plus the boundary surface), written step by step at a cost
+/// per step that does not grow with the run.
 
 #include <ios>
 #include <string>
@@ -20,8 +21,8 @@ struct ResultFields {
   bool contact = false;      ///< pressure, traction, gap and contact fraction per boundary triangle
 };
 
-/// One tetrahedral block of the sidecar: a body (and, once meshes carry regions, a region of a
-/// body: then its tets must be one contiguous range, and its path names its own datasets).
+/// One tetrahedral block of the sidecar: a body, or an element region of a body (with the body's
+/// nodes): a contiguous range of the scene's nodes and one of its tets.
 struct SidecarBlock {
   std::string name;  ///< the block's name in ParaView
   /// Where the block's datasets lie below /mesh and below each step group: "" for a block that
@@ -29,6 +30,7 @@ struct SidecarBlock {
   /// indices, and row views of the node and tet datasets).
   std::string path;
   Index num_nodes = 0, num_tets = 0;
+  Index first_node = 0, first_tet = 0;  ///< its first rows in the scene's node and tet datasets
 };
 
 /// What the sidecar lists from a results file.

@@ -7,8 +7,10 @@ each sidecar and each of ParaView's XDMF readers (XDMF Reader; Xdmf3 Reader T; X
 which shows the blocks as unnamed pieces) it checks that:
   * the time steps are 0 (the reference state) and then every step's load, exactly (the settling
     steps of a static run, all at load 1, at 2, 3, ...);
-  * the blocks are the bodies, named "body (material)", and "boundary", with the bodies' points
-    and cells and exactly the expected point, cell and field-data arrays;
+  * the blocks are the bodies, named "body (material)", a body with several element regions
+    replaced by one block per region, named "body/region (material)", with the body's points and
+    the region's cells, and "boundary"; each with exactly the expected point, cell and
+    field-data arrays;
   * at the reference state, a middle step and the last step, the points, the connectivity and
     every array equal the HDF5 datasets (ParaView reads the same doubles; the displacement equals
     x - X), the boundary's field data equals the step's values, and six-component arrays are
@@ -67,14 +69,25 @@ class Results:
         self.tets = mesh["tets"][:]
         self.tris = mesh["tris"][:]
         self.tet_body = mesh["tet_body"][:]
+        tet_region = mesh["tet_region"][:]
         names = list(mesh["body_names"].asstr()[:])
         materials = list(mesh["body_materials"].asstr()[:])
-        self.bodies = []  # (block name, node range, tet range)
+        region_names = list(mesh["region_names"].asstr()[:])
+        region_materials = list(mesh["region_materials"].asstr()[:])
+        self.blocks = []  # (block name, node range, tet range)
         for b, name in enumerate(names):
             tets = np.flatnonzero(self.tet_body == b)
-            nodes = self.tets[tets]
-            self.bodies.append((f"{name} ({materials[b]})", range(nodes.min(), nodes.max() + 1),
-                                range(tets[0], tets[-1] + 1)))
+            used = self.tets[tets]
+            nodes = range(used.min(), used.max() + 1)
+            regions = [r for r in dict.fromkeys(tet_region[tets]) if r >= 0]  # in order
+            if len(regions) < 2:
+                self.blocks.append((f"{name} ({materials[b]})", nodes,
+                                    range(tets[0], tets[-1] + 1)))
+                continue
+            for r in regions:
+                here = np.flatnonzero(tet_region == r)
+                self.blocks.append((f"{name}/{region_names[r]} ({region_materials[r]})", nodes,
+                                    range(here[0], here[-1] + 1)))
         self.depth = mesh["depth"][:] if "depth" in mesh else None
         self.steps = sorted(h5["steps"])
         # The sidecar's times: the loads, then 2, 3, ... for the settling steps of a static run.
@@ -156,9 +169,9 @@ def check_state(results, data, state, named):
     g = results.group(state)
     x = g["x"][:]
     blocks = leaves(data)
-    expect(len(blocks) == len(results.bodies) + 1,
-           f"{len(blocks)} blocks, expected {len(results.bodies)} bodies and the boundary")
-    for (name, grid), (expected, nodes, tets) in zip(blocks, results.bodies):
+    expect(len(blocks) == len(results.blocks) + 1,
+           f"{len(blocks)} blocks, expected {len(results.blocks)} and the boundary")
+    for (name, grid), (expected, nodes, tets) in zip(blocks, results.blocks):
         where = f"state {state}, block {expected}"
         if named:
             expect(name == expected, f"state {state}: block named {name!r}, expected {expected!r}")
@@ -240,7 +253,7 @@ def check_reader(results, reader_name, xmf):
 
 def summary(results, name):
     """Two lines describing what the sidecar shows."""
-    blocks = ", ".join(f"{b} {len(n)}/{len(t)}" for b, n, t in results.bodies)
+    blocks = ", ".join(f"{b} {len(n)}/{len(t)}" for b, n, t in results.blocks)
     fields = results.node_fields + (["depth"] if results.depth is not None else [])
     static = results.f["run"].attrs["analysis"] == "static"
     settled = sum(1 for t in results.times if t > 1) if static else 0

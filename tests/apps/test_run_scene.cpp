@@ -1,15 +1,20 @@
 // What run_scene writes to the results file, read back: per-tet stress and strain of the
 // homogeneous uniaxial_block scene against the closed forms of tests/materials/closed_forms.hpp
-// (uniaxial stretch, and simple shear prescribed on every node), and the fields the output
-// section and the scene's physics choose.
+// (uniaxial stretch, and simple shear prescribed on every node), the per-region blocks of a
+// two-region mesh against the neo-Hookean closed form, and the fields the output section and the
+// scene's physics choose.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
+#include <vector>
 
 #include "apps/scene_runner.hpp"
 #include "core/error.hpp"
+#include "core/hdf5_file.hpp"
+#include "core/mesh_generators.hpp"
 #include "core/results_file.hpp"
 #include "materials/closed_forms.hpp"
 
@@ -19,6 +24,7 @@ namespace {
 using namespace closed_form;
 using testing::load;
 using testing::run;
+using testing::temp_path;
 using testing::TemporaryResults;
 
 const std::string kAllFields = R"(output={"stress": true, "strain": true})";
@@ -127,6 +133,99 @@ TEST(RunScene, OutputSectionAndPhysicsChooseTheFields) {
       R"(obstacles=[{"name": "wall", "type": "plane", "point": [3, 0, 0], "normal": [-1, 0, 0], "penalty": 1e6}])";
   EXPECT_EQ(datasets({wall}, "uniaxial_block"), "displacement contact_pressure");
   EXPECT_EQ(datasets({wall, R"(output={"contact": false})"}, "uniaxial_block"), "displacement");
+}
+
+// A cube of 2 x 2 x 2 cells whose cells form a checkerboard of two element regions, "soft" and
+// "stiff" (neo-Hookean, shear moduli 10 kPa and 100 kPa), read from a Gmsh file whose tets
+// alternate between them cell by cell, sheared and stretched by its top face. The results hold
+// one block per region with the region's 24 tets in their file order, and each block's stress
+// and volume ratio are, tet by tet, the neo-Hookean Cauchy stress
+// sigma = (mu (F F^T - I) + lambda ln J I) / J of F = Ds Dm^-1 from the block's own tets and
+// points with its region's moduli. The library computes the same closed form through
+// P F^T / J: only round-off separates them (1e-10 of the largest stress; observed 2e-14).
+TEST(RunScene, EachRegionIsABlockWithItsOwnTetsAndStresses) {
+  const TetMesh cube = box_mesh({Vec3::Zero(), Vec3::Ones(), Eigen::Vector3i(2, 2, 2)});
+  std::vector<std::vector<Index>> region_tets(2);  // file tets of "soft" (0) and "stiff" (1)
+  std::ostringstream msh;
+  msh << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n3 1 \"soft\"\n"
+         "3 2 \"stiff\"\n$EndPhysicalNames\n$Nodes\n"
+      << cube.X.rows() << "\n";
+  msh.precision(17);
+  for (Index i = 0; i < cube.X.rows(); ++i)
+    msh << i + 1 << " " << cube.X(i, 0) << " " << cube.X(i, 1) << " " << cube.X(i, 2) << "\n";
+  msh << "$EndNodes\n$Elements\n" << cube.tets.rows() << "\n";
+  for (Index t = 0; t < cube.tets.rows(); ++t) {
+    const Vec3 c = (cube.X.row(cube.tets(t, 0)) + cube.X.row(cube.tets(t, 1)) +
+                    cube.X.row(cube.tets(t, 2)) + cube.X.row(cube.tets(t, 3))) /
+                   4;
+    const int region =
+        int(std::floor(2 * c.x()) + std::floor(2 * c.y()) + std::floor(2 * c.z())) % 2;
+    region_tets[region].push_back(t);
+    msh << t + 1 << " 4 2 " << region + 1 << " " << region + 1;
+    for (int k = 0; k < 4; ++k) msh << " " << cube.tets(t, k) + 1;
+    msh << "\n";
+  }
+  msh << "$EndElements\n";
+  ASSERT_EQ(region_tets[0].size(), 24u);
+  ASSERT_NE(region_tets[0].back(), 23) << "the regions must interleave in the file";
+  const std::string mesh_path = temp_path("checker.msh"), scene_path = temp_path("checker.json");
+  std::ofstream(mesh_path) << msh.str();
+  std::ofstream(scene_path) << R"({"name": "checker", "bodies": [{"name": "cube",
+      "mesh": {"file": ")" + mesh_path +
+                                   R"("},
+      "materials": {"soft": {"model": "neo_hookean", "mu": 1e4, "lambda": 4e4},
+                    "stiff": {"model": "neo_hookean", "mu": 1e5, "lambda": 4e5}}}],
+    "boundary": [
+      {"type": "fixed", "nodes": {"plane": {"normal": [0, 0, 1], "offset": 0}}},
+      {"type": "displaced", "displacement": [0.1, 0, 0.1],
+       "nodes": {"plane": {"normal": [0, 0, 1], "offset": 1}}}],
+    "output": {"stress": true, "strain": true}})";
+  const TemporaryResults out("regions");
+  const RunResult r = run(load_scene(scene_path), out.path);
+  std::filesystem::remove(mesh_path);
+  std::filesystem::remove(scene_path);
+  ASSERT_TRUE(r.success) << r.message;
+  const Index last = Index(r.steps.size()) - 1;
+
+  const H5File file = H5File::open(out.path);
+  const double mu[2] = {1e4, 1e5}, lambda[2] = {4e4, 4e5};
+  const char* names[2] = {"cube/soft (neo_hookean)", "cube/stiff (neo_hookean)"};
+  for (int k = 0; k < 2; ++k) {
+    SCOPED_TRACE(names[k]);
+    const std::string block = "blocks/" + std::to_string(k);
+    EXPECT_EQ(file.string_attribute("/mesh/" + block, "name"), names[k]);
+    const std::vector<double> local = file.read_doubles("/mesh/" + block + "/tets");
+    const Eigen::MatrixXd x = read_step_dataset(out.path, last, block + "/x");
+    const Eigen::MatrixXd stress = read_step_dataset(out.path, last, block + "/stress");
+    const Eigen::MatrixXd volume_ratio = read_step_dataset(out.path, last, block + "/volume_ratio");
+    ASSERT_EQ(local.size(), 4 * region_tets[k].size());
+    ASSERT_EQ(x.rows(), cube.X.rows());
+    ASSERT_EQ(stress.rows(), Index(region_tets[k].size()));
+    const double scale = stress.cwiseAbs().maxCoeff();
+    EXPECT_GT(scale, 10.0) << "the region must be deformed";
+    const int row[6] = {0, 1, 2, 0, 1, 0}, col[6] = {0, 1, 2, 1, 2, 2};  // xx yy zz xy yz xz
+    for (size_t t = 0; t < region_tets[k].size(); ++t) {
+      Eigen::Vector4i corners;
+      for (int c = 0; c < 4; ++c) {
+        corners(c) = int(local[4 * t + c]);
+        EXPECT_EQ(corners(c), cube.tets(region_tets[k][t], c)) << "tet " << t << " of the region";
+      }
+      Mat3 Dm, Ds;
+      for (int c = 0; c < 3; ++c) {
+        Dm.col(c) = (cube.X.row(corners(c + 1)) - cube.X.row(corners(0))).transpose();
+        Ds.col(c) = (x.row(corners(c + 1)) - x.row(corners(0))).transpose();
+      }
+      const Mat3 F = Ds * Dm.inverse();
+      const double J = F.determinant();
+      const Mat3 sigma = (mu[k] * (F * F.transpose() - Mat3::Identity()) +
+                          lambda[k] * std::log(J) * Mat3::Identity()) /
+                         J;
+      for (int c = 0; c < 6; ++c)
+        EXPECT_NEAR(stress(Index(t), c), sigma(row[c], col[c]), 1e-10 * scale) << "tet " << t;
+      EXPECT_NEAR(volume_ratio(Index(t)), J, 1e-12) << "tet " << t;
+    }
+  }
+  EXPECT_FALSE(file.exists("/mesh/blocks/2"));
 }
 
 RunResult run_restarted(const Scene& scene, const std::string& out, const std::string& restart,

@@ -9,6 +9,7 @@
 #include "apps/json_reader.hpp"
 #include "apps/scene.hpp"
 #include "core/error.hpp"
+#include "core/two_region_msh.hpp"
 
 namespace depthfem {
 namespace {
@@ -331,34 +332,8 @@ TEST_F(SceneFileTest, WholeSceneIsCheckedBeforeAnyMeshIsRead) {
   EXPECT_NE(m.find("scene.json: solver.tolerence: unknown key"), std::string::npos) << m;
 }
 
-// Two tets sharing the face (7, 300, 12): tet 3 in the physical volume "soft", tet 4 in "bone",
-// the triangle (50, 7, 300) in the surface "base plate".
-constexpr const char* kTwoRegions = R"($MeshFormat
-2.2 0 8
-$EndMeshFormat
-$PhysicalNames
-3
-2 5 "base plate"
-3 1 "soft"
-3 2 "bone"
-$EndPhysicalNames
-$Nodes
-5
-50 0 0 0
-7 1 0 0
-300 0 1 0
-12 0 0 1
-9 1 1 1
-$EndNodes
-$Elements
-3
-2 2 2 5 1 50 7 300
-3 4 2 1 1 50 7 300 12
-4 4 2 2 2 7 300 12 9
-$EndElements
-)";
-
-// One body per region of kTwoRegions, and a body with both regions and a material per region.
+// One body per region of testing::kTwoRegionMsh, and a body with both regions and a material per
+// region.
 const char* kRegions = R"({
   "bodies": [
     {"name": "soft", "mesh": {"file": "two.msh", "regions": ["soft"]},
@@ -374,7 +349,7 @@ class RegionSceneTest : public SceneFileTest {
  protected:
   void SetUp() override {
     SceneFileTest::SetUp();
-    std::ofstream(dir / "two.msh") << kTwoRegions;
+    std::ofstream(dir / "two.msh") << testing::kTwoRegionMsh;
   }
 };
 
@@ -389,6 +364,14 @@ TEST_F(RegionSceneTest, BodiesTakeRegionsOfAFileAndAMaterialPerRegion) {
   EXPECT_EQ(s.groups[1].tets, (std::vector<Index>{2}));
   EXPECT_EQ(s.groups[2].tets, (std::vector<Index>{3}));
   EXPECT_EQ(material_moduli(s.groups[2].material).mu, 100);
+  // The regions of "both" as the mesh stores them; a body of one region has that region.
+  ASSERT_EQ(s.mesh.bodies[2].regions.size(), 2u);
+  EXPECT_EQ(s.mesh.bodies[2].regions[0].name, "soft");
+  EXPECT_EQ(s.mesh.bodies[2].regions[0].first_tet, 2);
+  EXPECT_EQ(s.mesh.bodies[2].regions[1].name, "bone");
+  EXPECT_EQ(s.mesh.bodies[2].regions[1].first_tet, 3);
+  ASSERT_EQ(s.mesh.bodies[1].regions.size(), 1u);
+  EXPECT_EQ(s.mesh.bodies[1].regions[0].num_tets, 1);
   // Each body keeps the nodes of "base plate" it has: all three in "soft" (scene nodes 0, 1, 2)
   // and "both" (8, 9, 10), nodes 7 and 300 in "bone" (4, 5).
   const std::vector<Index> base = {0, 1, 2, 4, 5, 8, 9, 10};
@@ -423,14 +406,15 @@ TEST_F(RegionSceneTest, RegionAndSetErrorsNameFileKeyAndChoices) {
                       "regions"),
             std::string::npos);
   EXPECT_NE(error(replaced(kRegions, "\"set\": \"base plate\"", "\"set\": \"top\""))
-                .find("boundary[0].nodes.set: no node set 'top' (the meshes have 'base plate', "
-                      "'bone', 'soft')"),
+                .find("boundary[0].nodes.set: no node set 'top' (the meshes have '7', "
+                      "'base plate', 'bone', 'soft')"),
             std::string::npos);
-  // The plane x = 5 holds nodes of "both" only.
-  EXPECT_NE(error(replaced(kRegions, "\"set\": \"base plate\"",
-                           "\"plane\": {\"normal\": [1, 0, 0], \"offset\": 5}, \"body\": \"soft\""))
-                .find("boundary[0].nodes: selects no nodes"),
-            std::string::npos);
+  // The plane x = 5.1 holds nodes of "both" only.
+  EXPECT_NE(
+      error(replaced(kRegions, "\"set\": \"base plate\"",
+                     "\"plane\": {\"normal\": [1, 0, 0], \"offset\": 5.1}, \"body\": \"soft\""))
+          .find("boundary[0].nodes: selects no nodes"),
+      std::string::npos);
 }
 
 }  // namespace

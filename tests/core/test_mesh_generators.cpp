@@ -1,9 +1,12 @@
 // Generators and boundary extraction: exact volumes, closed outward surfaces, sphere nodes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <stdexcept>
+#include <vector>
 
 #include "core/boundary.hpp"
 #include "core/error.hpp"
@@ -156,6 +159,84 @@ TEST(Mesh, BodiesAreAppendedWithOffsets) {
     EXPECT_EQ(scene.tet_body(scene.tri_tet(f)), 1);
   }
   expect_closed_oriented(scene.tris);
+}
+
+// Tets of a body with regions are stored region after region, regions in the order of their
+// first tets, each region's tets in their given order; the boundary follows the stored tets.
+// Regions interleaved as a checkerboard of the cells of a 2 x 2 x 1 box (6 tets per cell), listed
+// so that the first tet's region is the second name; the body comes after another one.
+TEST(Mesh, RegionsAreStoredContiguouslyInTheirGivenOrder) {
+  const TetMesh a = box_mesh({Vec3::Zero(), Vec3::Ones(), Eigen::Vector3i(1, 1, 1)});
+  const TetMesh b = box_mesh({Vec3(3, 0, 0), Vec3(5, 2, 1), Eigen::Vector3i(2, 2, 1)});
+  std::vector<Index> tet_region;
+  std::vector<std::vector<Index>> tets_of(2);  // original tets of "odd" (0) and "even" (1)
+  for (Index t = 0; t < b.tets.rows(); ++t) {
+    Vec3 c = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) c += b.X.row(b.tets(t, k)).transpose() / 4;
+    const Index region = (int(std::floor(c.x() - 3)) + int(std::floor(c.y()))) % 2 == 0 ? 1 : 0;
+    tet_region.push_back(region);
+    tets_of[region].push_back(t);
+  }
+  ASSERT_EQ(tet_region[0], 1);
+  ASSERT_EQ(tet_region[6], 0) << "the regions must interleave";
+  Mesh scene;
+  scene.add_body("a", a);
+  scene.add_body("b", b, {}, {"odd", "even"}, tet_region);
+  const Body& body = scene.bodies[1];
+  EXPECT_TRUE(scene.bodies[0].regions.empty());
+  ASSERT_EQ(body.regions.size(), 2u);
+  const Index first = a.tets.rows();
+  EXPECT_EQ(body.regions[0].name, "even");
+  EXPECT_EQ(body.regions[0].first_tet, first);
+  EXPECT_EQ(body.regions[0].num_tets, 12);
+  EXPECT_EQ(body.regions[1].name, "odd");
+  EXPECT_EQ(body.regions[1].first_tet, first + 12);
+  EXPECT_EQ(body.regions[1].num_tets, 12);
+  for (int r = 0; r < 2; ++r) {
+    const std::vector<Index>& original = tets_of[r == 0 ? 1 : 0];
+    for (size_t k = 0; k < original.size(); ++k)
+      EXPECT_EQ(scene.tets.row(body.regions[r].first_tet + Index(k)),
+                (b.tets.row(original[k]).array() + body.first_node).matrix())
+          << body.regions[r].name << " tet " << k;
+  }
+  // Every boundary triangle is a face of the tet recorded as its owner.
+  for (Index f = body.first_tri; f < body.first_tri + body.num_tris; ++f)
+    for (int c = 0; c < 3; ++c)
+      EXPECT_TRUE((scene.tets.row(scene.tri_tet(f)).array() == scene.tris(f, c)).any())
+          << "triangle " << f;
+  EXPECT_EQ(body.num_tris, boundary_faces(b.tets).tris.rows());
+  expect_closed_oriented(scene.tris);
+}
+
+// A mesh without regions, with one region, or with regions already contiguous keeps its tets,
+// boundary triangles and their owners exactly.
+TEST(Mesh, ContiguousRegionsKeepTheTetOrder) {
+  const TetMesh ball = ball_mesh({Vec3::Zero(), 1, 3});
+  const Index n = ball.tets.rows();
+  Mesh plain, one, two;
+  plain.add_body("ball", ball);
+  one.add_body("ball", ball, {}, {"all"}, std::vector<Index>(size_t(n), 0));
+  std::vector<Index> halves(size_t(n), 1);
+  std::fill(halves.begin(), halves.begin() + n / 2, 0);
+  two.add_body("ball", ball, {}, {"first", "second"}, halves);
+  EXPECT_TRUE(plain.bodies[0].regions.empty());
+  ASSERT_EQ(one.bodies[0].regions.size(), 1u);
+  EXPECT_EQ(one.bodies[0].regions[0].num_tets, n);
+  ASSERT_EQ(two.bodies[0].regions.size(), 2u);
+  EXPECT_EQ(two.bodies[0].regions[1].first_tet, n / 2);
+  for (const Mesh* m : {&one, &two}) {
+    EXPECT_EQ(m->tets, plain.tets);
+    EXPECT_EQ(m->tris, plain.tris);
+    EXPECT_EQ(m->tri_tet, plain.tri_tet);
+  }
+}
+
+TEST(Mesh, RegionsThatDoNotMatchTheTetsAreRejected) {
+  const TetMesh box = box_mesh({Vec3::Zero(), Vec3::Ones(), Eigen::Vector3i(1, 1, 1)});
+  Mesh scene;
+  EXPECT_THROW(scene.add_body("short", box, {}, {"a"}, {0, 0}), std::invalid_argument);
+  EXPECT_THROW(scene.add_body("unknown", box, {}, {"a"}, {0, 0, 0, 1, 0, 0}),
+               std::invalid_argument);
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include "core/mesh_file.hpp"
 #include "core/obj_reader.hpp"
 #include "core/tetgen_reader.hpp"
+#include "core/two_region_msh.hpp"
 
 namespace depthfem {
 namespace {
@@ -153,33 +154,6 @@ $Elements
 3 50 7 300 12
 3 2 4 1
 4 7 300 12 9
-$EndElements
-)";
-
-// The same groups in MSH 2.2 (the first element tag is the physical group); tets on lines 22, 23.
-constexpr const char* kMsh22Groups = R"($MeshFormat
-2.2 0 8
-$EndMeshFormat
-$PhysicalNames
-3
-2 5 "base plate"
-3 1 "soft"
-3 2 "bone"
-$EndPhysicalNames
-$Nodes
-5
-50 0.1 -0.2 0.3
-7 1.6 -0.2 0.3
-300 0.1 1.3 0.3
-12 0.1 -0.2 1.8
-9 1.6 1.3 1.8
-$EndNodes
-$Elements
-4
-1 15 2 7 1 9
-2 2 2 5 1 50 7 300
-3 4 2 1 1 50 7 300 12
-4 4 2 2 2 7 300 12 9
 $EndElements
 )";
 
@@ -502,7 +476,8 @@ TEST_F(ReadersTest, GmshWithoutTetsIsAnError) {
                                  {"surface.msh", "contains no 4-node tetrahedra"}));
 }
 
-// Regions and node sets of kMsh41Groups / kMsh22Groups (node indices in file order).
+// Regions and node sets of kMsh41Groups / testing::kTwoRegionMsh (node indices in file
+// order).
 void expect_reference_groups(const LoadedMesh& loaded) {
   expect_reference_mesh(loaded);
   EXPECT_EQ(loaded.region_names, (std::vector<std::string>{"soft", "bone"}));
@@ -517,7 +492,7 @@ TEST_F(ReadersTest, Gmsh41PhysicalGroupsBecomeRegionsAndNodeSets) {
 }
 
 TEST_F(ReadersTest, Gmsh22PhysicalGroupsBecomeRegionsAndNodeSets) {
-  expect_reference_groups(read_gmsh(write("groups.msh", kMsh22Groups)));
+  expect_reference_groups(read_gmsh(write("groups.msh", testing::kTwoRegionMsh)));
 }
 
 TEST_F(ReadersTest, GmshWithoutPhysicalVolumesHasNoRegions) {
@@ -528,8 +503,8 @@ TEST_F(ReadersTest, GmshWithoutPhysicalVolumesHasNoRegions) {
 }
 
 TEST_F(ReadersTest, GmshPhysicalNamesMayHoldSpaces) {
-  const LoadedMesh loaded =
-      read_gmsh(write("names.msh", replace_line(kMsh22Groups, 7, "3 1 \"soft  tissue\"")));
+  const LoadedMesh loaded = read_gmsh(
+      write("names.msh", replace_line(testing::kTwoRegionMsh, 7, "3 1 \"soft  tissue\"")));
   EXPECT_EQ(loaded.region_names[0], "soft  tissue");
 }
 
@@ -543,7 +518,7 @@ TEST_F(ReadersTest, GmshTetInTwoRegionsIsAnError) {
 
 TEST_F(ReadersTest, GmshTetWithoutRegionBesideOthersIsAnError) {
   const std::string file =
-      write("none.msh", replace_line(kMsh22Groups, 23, "4 4 2 0 2 7 300 12 9"));
+      write("none.msh", replace_line(testing::kTwoRegionMsh, 23, "4 4 2 0 2 7 300 12 9"));
   EXPECT_TRUE(throws_input_error(
       [&] { read_gmsh(file); },
       {"none.msh:23:",
@@ -551,13 +526,14 @@ TEST_F(ReadersTest, GmshTetWithoutRegionBesideOthersIsAnError) {
 }
 
 TEST_F(ReadersTest, GmshUnquotedPhysicalNameIsAnError) {
-  const std::string file = write("quote.msh", replace_line(kMsh22Groups, 6, "2 5 base"));
+  const std::string file = write("quote.msh", replace_line(testing::kTwoRegionMsh, 6, "2 5 base"));
   EXPECT_TRUE(throws_input_error([&] { read_gmsh(file); },
                                  {"quote.msh:6:", "physical name must be in double quotes"}));
 }
 
 TEST_F(ReadersTest, GmshGroupElementWithUndefinedNodeIsAnError) {
-  const std::string file = write("tri.msh", replace_line(kMsh22Groups, 21, "2 2 2 5 1 50 7 301"));
+  const std::string file =
+      write("tri.msh", replace_line(testing::kTwoRegionMsh, 21, "2 2 2 5 1 50 7 301"));
   EXPECT_TRUE(
       throws_input_error([&] { read_gmsh(file); },
                          {"tri.msh:21:", "element 2 references node 301, which is not defined"}));

@@ -1,7 +1,7 @@
 // Results files: exact round trip of mesh, run metadata, the reference state, steps, fields and
-// timing through the HDF5 C API; per-body views; completed steps surviving a killed writer; the
-// XDMF sidecar's structure (every dataset it names exists with the dimensions it states) and its
-// step-by-step growth; errors naming the file.
+// timing through the HDF5 C API; per-body and per-region views; completed steps surviving a killed
+// writer; the XDMF sidecar's structure (every dataset it names exists with the dimensions it
+// states) and its step-by-step growth; errors naming the file.
 #include <gtest/gtest.h>
 #include <hdf5.h>
 #include <sys/wait.h>
@@ -140,6 +140,7 @@ struct Fixture {
                {"bottom", "top"},
                {"mooney_rivlin"},
                {},
+               {},
                {}};
 };
 
@@ -190,6 +191,17 @@ ElementFields element_values(Index tets, int k) {
     e.volume_ratio(t) = 1 + t / 9.0;
   }
   return e;
+}
+
+// Writes a results file of `mesh` without constraints and with one step: positions(mesh, 1) and
+// element_values(#tets, 1), which it returns.
+ElementFields write_one_step(const fs::path& path, const Mesh& mesh, const RunInfo& info) {
+  const ElementFields elements = element_values(mesh.num_tets(), 1);
+  StepRecord step = step_record(1);
+  step.reactions.resize(0, 3);
+  ResultsFile file(path, mesh, VectorX(), info);
+  file.append_step(step, positions(mesh, 1), nullptr, &elements);
+  return elements;
 }
 
 // Row-major values of a matrix, as the file stores them.
@@ -263,6 +275,9 @@ TEST_F(ResultsFileTest, RoundTripOfMeshRunStepsAndTiming) {
   EXPECT_EQ(raw.doubles("/mesh/depth"), std::vector<double>(f_.depth.begin(), f_.depth.end()));
   EXPECT_EQ(raw.strings("/mesh/body_names"), std::vector<std::string>({"block"}));
   EXPECT_EQ(raw.strings("/mesh/body_materials"), std::vector<std::string>({"mooney_rivlin"}));
+  EXPECT_EQ(raw.values<int>("/mesh/tet_region", H5T_NATIVE_INT, dims), std::vector<int>(12, -1));
+  EXPECT_TRUE(raw.has("/mesh/region_names") && raw.strings("/mesh/region_names").empty());
+  EXPECT_TRUE(raw.has("/mesh/region_materials") && raw.strings("/mesh/region_materials").empty());
   EXPECT_FALSE(raw.has("/mesh/blocks")) << "one body: the sidecar uses the scene's datasets";
 
   EXPECT_EQ(raw.string_attribute("/run", "scene"), f_.info.scene_json);
@@ -452,16 +467,10 @@ TEST_F(ResultsFileTest, KilledWriterKeepsCompletedSteps) {
 TEST_F(ResultsFileTest, EveryBodyViewsItsOwnRows) {
   const fs::path path = dir_ / "bodies.h5";
   const Mesh mesh = two_bodies();
-  RunInfo info{"{}", "0.1.0", "static", 1, {}, {"neo_hookean", "rigid"}, {}, {}};
+  RunInfo info{"{}", "0.1.0", "static", 1, {}, {"neo_hookean", "rigid"}, {}, {}, {}};
   info.fields.stress = info.fields.strain = true;
   const Points x = positions(mesh, 1);
-  const ElementFields elements = element_values(mesh.num_tets(), 1);
-  StepRecord step = step_record(1);
-  step.reactions.resize(0, 3);
-  {
-    ResultsFile file(path, mesh, VectorX(), info);
-    file.append_step(step, x, nullptr, &elements);
-  }
+  const ElementFields elements = write_one_step(path, mesh, info);
   const RawFile raw(path);
   std::vector<hsize_t> dims;
   for (Index b = 0; b < 2; ++b) {
@@ -490,6 +499,105 @@ TEST_F(ResultsFileTest, EveryBodyViewsItsOwnRows) {
   }
 }
 
+// A body with two element regions (interleaved in its mesh: every third tet in "patella") between
+// a body without regions and one with a single region: the sidecar shows four blocks, the
+// two-region body as one per region, named after body, region and the region's material, with
+// the body's nodes and the region's tets, in the regions' order in the body (patella first: tet 0
+// is in it). Every block's tets (block-local) are its region's tets of the original mesh in their
+// order, and the per-tet fields it views are the rows of those tets.
+TEST_F(ResultsFileTest, EveryRegionOfABodyIsABlockOfItsOwn) {
+  const fs::path path = dir_ / "regions.h5";
+  const TetMesh cube = box_mesh({Vec3(0, 0, 0), Vec3(1, 1, 1), Eigen::Vector3i(1, 1, 1)});
+  const TetMesh leg = box_mesh({Vec3(2, 0, 0), Vec3(3, 1, 2), Eigen::Vector3i(1, 1, 2)});
+  const TetMesh bone = box_mesh({Vec3(4, 0, 0), Vec3(5, 1, 1), Eigen::Vector3i(1, 1, 1)});
+  std::vector<Index> tet_region;  // into {"soft", "patella"}
+  std::vector<std::vector<Index>> original(2);
+  for (Index t = 0; t < leg.tets.rows(); ++t) {
+    tet_region.push_back(t % 3 == 0 ? 1 : 0);
+    original[tet_region.back()].push_back(t);
+  }
+  Mesh mesh;
+  mesh.add_body("plain", cube);
+  mesh.add_body("leg", leg, {}, {"soft", "patella"}, tet_region);
+  mesh.add_body("bone", bone, {}, {"cortical"}, std::vector<Index>(bone.tets.rows(), 0));
+  RunInfo info{"{}",
+               "0.1.0",
+               "static",
+               1,
+               {},
+               {"neo_hookean", "mooney_rivlin, neo_hookean", "rigid"},
+               {"neo_hookean", "mooney_rivlin", "rigid"},
+               {.stress = true, .strain = true},
+               {}};
+  const Points x = positions(mesh, 1);
+  const ElementFields elements = write_one_step(path, mesh, info);
+  const RawFile raw(path);
+  std::vector<hsize_t> dims;
+  EXPECT_EQ(raw.strings("/mesh/region_names"),
+            std::vector<std::string>({"patella", "soft", "cortical"}));
+  EXPECT_EQ(raw.strings("/mesh/region_materials"), info.region_materials);
+  std::vector<int> tet_region_file(6, -1);  // "plain": no region
+  tet_region_file.insert(tet_region_file.end(), original[1].size(), 0);
+  tet_region_file.insert(tet_region_file.end(), original[0].size(), 1);
+  tet_region_file.insert(tet_region_file.end(), 6, 2);
+  EXPECT_EQ(raw.values<int>("/mesh/tet_region", H5T_NATIVE_INT, dims), tet_region_file);
+
+  struct Expected {
+    std::string name;
+    Index first_node, first_tet;
+    std::vector<Index> tets;  // of the body's own mesh
+    const TetMesh* body;
+  };
+  const Body &plain = mesh.bodies[0], &in_leg = mesh.bodies[1], &in_bone = mesh.bodies[2];
+  const std::vector<Index> all6 = {0, 1, 2, 3, 4, 5};
+  const std::vector<Expected> blocks = {
+      {"plain (neo_hookean)", plain.first_node, plain.first_tet, all6, &cube},
+      {"leg/patella (neo_hookean)", in_leg.first_node, in_leg.first_tet, original[1], &leg},
+      {"leg/soft (mooney_rivlin)", in_leg.first_node, in_leg.first_tet + Index(original[1].size()),
+       original[0], &leg},
+      {"bone (rigid)", in_bone.first_node, in_bone.first_tet, all6, &bone}};
+  const std::string xmf = read_text(dir_ / "regions.xmf");
+  for (size_t k = 0; k < blocks.size(); ++k) {
+    const Expected& e = blocks[k];
+    SCOPED_TRACE(e.name);
+    const Index num_nodes = Index(e.body->X.rows()), num_tets = Index(e.tets.size());
+    const std::string block = "blocks/" + std::to_string(k) + "/";
+    // In the sidecar, once per state: the block's name, then its tets and points.
+    const std::string grid =
+        "<Grid Name=\"" + e.name +
+        "\" GridType=\"Uniform\">\n"
+        "          <Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"" +
+        std::to_string(num_tets) + "\"><DataItem Dimensions=\"" + std::to_string(num_tets) +
+        " 4\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">regions.h5:/mesh/" + block +
+        "tets</DataItem></Topology>\n";
+    const size_t first = xmf.find(grid);
+    EXPECT_NE(first, std::string::npos);
+    EXPECT_NE(xmf.find(grid, first + 1), std::string::npos) << "in the reference and the step";
+    EXPECT_NE(xmf.find("<Geometry GeometryType=\"XYZ\"><DataItem Dimensions=\"" +
+                       std::to_string(num_nodes) +
+                       " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">regions.h5:"
+                       "/steps/000001/" +
+                       block + "x<"),
+              std::string::npos);
+    EXPECT_EQ(raw.string_attribute("/mesh/" + block.substr(0, block.size() - 1), "name"), e.name);
+    // Block-local tets: the region's tets of the body's mesh, in their order.
+    const std::vector<int> local = raw.values<int>("/mesh/" + block + "tets", H5T_NATIVE_INT, dims);
+    ASSERT_EQ(dims, std::vector<hsize_t>({hsize_t(num_tets), 4}));
+    for (Index t = 0; t < num_tets; ++t)
+      for (int c = 0; c < 4; ++c)
+        EXPECT_EQ(local[4 * t + c], e.body->tets(e.tets[t], c)) << "tet " << t;
+    // Views: the body's nodes, the region's rows of the tet fields.
+    const std::string here = "/steps/000001/" + block;
+    EXPECT_EQ(raw.doubles(here + "x"), row_major(x.middleRows(e.first_node, num_nodes)));
+    EXPECT_EQ(raw.doubles(here + "stress"),
+              row_major(elements.stress.middleRows(e.first_tet, num_tets)));
+    EXPECT_EQ(raw.doubles(here + "volume_ratio"),
+              row_major(elements.volume_ratio.segment(e.first_tet, num_tets)));
+  }
+  EXPECT_EQ(xmf.find("<Grid Name=\"leg"), xmf.find("<Grid Name=\"leg/patella"))
+      << "no block for the whole two-region body";
+}
+
 // The sidecar: one temporal collection of states (the reference state at time 0, then every step
 // at its exact load), each a spatial collection of one tetrahedral grid per body, named after the
 // body and its material, and the boundary grid with the step's values as field data. Every HDF5
@@ -497,7 +605,7 @@ TEST_F(ResultsFileTest, EveryBodyViewsItsOwnRows) {
 TEST_F(ResultsFileTest, XdmfSidecarStructure) {
   const fs::path path = dir_ / "sidecar.h5";
   const Mesh mesh = two_bodies();
-  RunInfo info{"{}", "0.1.0", "dynamic", 1, {"clamp"}, {"neo_hookean", "rigid"}, {}, {}};
+  RunInfo info{"{}", "0.1.0", "dynamic", 1, {"clamp"}, {"neo_hookean", "rigid"}, {}, {}, {}};
   info.fields = {
       .velocity = true, .displacement = true, .stress = true, .strain = true, .contact = true};
   info.initial_velocity = Points::Zero(mesh.num_nodes(), 3);
