@@ -52,8 +52,9 @@ Vec3 expect_pressure_integrates_to_the_contact_rows(const Scene& s, const std::s
       traction_integral += (second ? -area : area) * traction.row(f).transpose();
     }
     EXPECT_NEAR(force, magnitudes.sum(), 1e-12 * magnitudes.sum());
-    if (forces.rows() == 1)
+    if (forces.rows() == 1) {
       EXPECT_LE((traction_integral - forces.row(0).transpose()).norm(), 1e-12 * magnitudes.sum());
+    }
   }
   return traction_integral;
 }
