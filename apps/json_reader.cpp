@@ -124,6 +124,12 @@ json parse_json(const std::string& text, const std::string& where) {
   };
   try {
     return json::parse(text, track);
+  } catch (const json::out_of_range&) {
+    // The parser's only range error: a number beyond a double ("1e999"), which the library's
+    // message would quote whole.
+    const std::string path = path_of(frames);
+    throw InputError(where + ": " + (path.empty() ? "" : path + ": ") +
+                     "a number beyond the range of a double (about 1.8e308)");
   } catch (const json::parse_error& e) {
     // "[json.exception.parse_error.101] parse error at line 3, column 5: syntax error ...":
     // keep what follows the library's tag.

@@ -549,9 +549,11 @@ void apply_override(json& root, const Override& o, const std::string& file) {
       node = &(*node)[seg];
     }
   }
-  // Arrays, objects and quoted strings must be valid JSON; a bare word that is no JSON number or
-  // literal is a string.
-  if (!o.value.empty() && std::string_view("[{\"").find(o.value[0]) != std::string_view::npos) {
+  // Arrays, objects and quoted strings (after any JSON whitespace) must be valid JSON, within the
+  // size and depth limits of a scene; a bare word that is no JSON number or literal is a string.
+  const size_t first = o.value.find_first_not_of(" \t\n\r");
+  if (first != std::string::npos &&
+      std::string_view("[{\"").find(o.value[first]) != std::string_view::npos) {
     *node = parse_json(o.value, where);
   } else {
     json value = json::parse(o.value, nullptr, false);

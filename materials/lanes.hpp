@@ -107,24 +107,25 @@ Lanes<W> select(const LaneMask<W>& m, const Lanes<W>& a, const Lanes<W>& b) {
 }
 
 namespace detail {
-// Shuffle mask of one butterfly stage of a W x W transpose: rows i and i + h (i & h == 0) swap
-// their off-diagonal h x h sub-blocks; the low result takes row i's entries k with k & h == 0
-// and row i + h's entries k - h elsewhere, the high result the rest.
+// One butterfly stage of a W x W transpose: rows i and i + h (i & h == 0) swap their
+// off-diagonal h x h sub-blocks; the low result takes row i's entries k with k & h == 0 and row
+// i + h's entries k - h elsewhere, the high result the rest (indices >= W pick from row i + h).
+// __builtin_shufflevector is understood by GCC (12 and later) and clang alike.
 template <int W, int h, bool kHigh, std::size_t... k>
-constexpr typename NativeLanes<W>::Mask butterfly_mask(std::index_sequence<k...>) {
-  return typename NativeLanes<W>::Mask{
-      static_cast<std::int64_t>(kHigh ? ((k & h) ? W + k : k + h) : ((k & h) ? W + k - h : k))...};
+typename NativeLanes<W>::Value butterfly(const typename NativeLanes<W>::Value& a,
+                                         const typename NativeLanes<W>::Value& b,
+                                         std::index_sequence<k...>) {
+  return __builtin_shufflevector(
+      a, b, (kHigh ? ((k & h) ? W + k : k + h) : ((k & h) ? W + k - h : k))...);
 }
 
 template <int W, int h>
 void butterfly_stage(Lanes<W>* rows) {
-  constexpr auto lo = butterfly_mask<W, h, false>(std::make_index_sequence<W>{});
-  constexpr auto hi = butterfly_mask<W, h, true>(std::make_index_sequence<W>{});
   for (int i = 0; i < W; ++i) {
     if (i & h) continue;
     const Lanes<W> a = rows[i], b = rows[i + h];
-    rows[i].v = __builtin_shuffle(a.v, b.v, lo);
-    rows[i + h].v = __builtin_shuffle(a.v, b.v, hi);
+    rows[i].v = butterfly<W, h, false>(a.v, b.v, std::make_index_sequence<W>{});
+    rows[i + h].v = butterfly<W, h, true>(a.v, b.v, std::make_index_sequence<W>{});
   }
 }
 }  // namespace detail

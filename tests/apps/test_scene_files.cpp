@@ -288,6 +288,31 @@ TEST_F(SceneFileTest, JsonIsBoundedAndStrict) {
             std::string::npos);
 }
 
+// Found by fuzzing the scene reader: a number beyond a double left the parser as the JSON
+// library's own exception, which named neither file nor key and quoted the whole number.
+TEST_F(SceneFileTest, NumberBeyondADoubleIsNamedWithItsKey) {
+  const std::string m = error(replaced(kValid, "\"C1\": 1", "\"C1\": 1e999"));
+  EXPECT_NE(m.find("scene.json: bodies[0].material.C1: a number beyond the range of a double"),
+            std::string::npos)
+      << m;
+  EXPECT_NE(error("[1, -2e400]").find("scene.json: [1]: a number beyond"), std::string::npos);
+  EXPECT_NE(error(kValid, {parse_override("gravity=[0, 0, " + std::string(400, '9') + "]")})
+                .find("scene.json: --set gravity: [2]: a number beyond"),
+            std::string::npos);
+}
+
+// A --set value is read as JSON after leading whitespace too, within the same limits: " [[[..."
+// escaped the depth limit and overflowed the stack when the scene was copied (found by reading
+// apply_override, confirmed with AddressSanitizer).
+TEST_F(SceneFileTest, SetValueAfterWhitespaceIsBoundedLikeAnyJson) {
+  const std::string deep = " " + std::string(100000, '[') + std::string(100000, ']');
+  EXPECT_NE(error(kValid, {parse_override("gravity=" + deep)})
+                .find("scene.json: --set gravity:1: nested more than 64 levels"),
+            std::string::npos);
+  EXPECT_EQ(load_scene(write(kValid), {parse_override("gravity=\t [0, 0, -9.5]")}).gravity.z(),
+            -9.5);
+}
+
 TEST_F(SceneFileTest, EveryErrorNamesTheSceneFileAndKey) {
   // Generator parameters, at the key of the scene.
   EXPECT_NE(error(replaced(kValid, "\"cells\": [1,1,1]", "\"cells\": [0,1,1]"))

@@ -136,7 +136,8 @@ TEST(BatchedTetKernel, InvertedAndPaddingLanesLeaveTheOthersAlone) {
     for (int l = 0; l < valid; ++l) set_lane(in, l, tets[l] = random_tet(rng, moderate_F));
     Mat3 reflect = Mat3::Identity();
     reflect(2, 2) = -1;
-    tets[valid] = random_tet(rng, [&](std::mt19937& r) { return reflect * moderate_F(r); });
+    // A Mat3, not Eigen's product expression, which would refer to the destroyed moderate_F(r).
+    tets[valid] = random_tet(rng, [&](std::mt19937& r) -> Mat3 { return reflect * moderate_F(r); });
     set_lane(in, valid, tets[valid]);
     for (int l = valid + 1; l < kLanes; ++l) {
       const double fill = l % 2 ? 0.0 : std::numeric_limits<double>::quiet_NaN();
