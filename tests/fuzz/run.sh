@@ -16,6 +16,6 @@ build-sanitize/tests/test_apps --gtest_filter='SceneFile*'
 bash tests/apps/test_cli.sh build-sanitize/apps/depthfem .
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-cp tests/fuzz/corpus/* "$work/"
+cp tests/fuzz/corpus/inputs/* "$work/"
 build-sanitize/tests/fuzz_inputs -max_total_time="$seconds" -max_len=4096 -timeout=10 \
   -rss_limit_mb=4096 -print_final_stats=1 "$work" 2>&1 | tail -15
