@@ -73,11 +73,12 @@ MaterialNames material_names(const Scene& scene) {
 // Throws when `out`, or a file written beside it, is one of `inputs` (the same file under any
 // name).
 void refuse_overwriting_inputs(const std::string& out, const std::vector<std::string>& inputs) {
-  const std::filesystem::path sidecar = std::filesystem::path(out).replace_extension(".xmf");
-  for (const std::filesystem::path& written : {std::filesystem::path(out), sidecar}) {
+  std::vector<std::string> written = results_sidecars(out);
+  written.push_back(out);
+  for (const std::string& path : written) {
     for (const std::string& input : inputs) {
       std::error_code error;
-      if (std::filesystem::equivalent(written, input, error)) {
+      if (std::filesystem::equivalent(path, input, error)) {
         throw InputError(located(
             out, 0, "--out would overwrite the input " + input + "; choose another results path"));
       }
@@ -163,6 +164,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
                  scene.analysis,
                  threads,
                  {},
+                 model->system.interface_names(),
                  std::move(materials.bodies),
                  std::move(materials.regions),
                  fields,

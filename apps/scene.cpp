@@ -428,9 +428,9 @@ void read_dynamic(JsonObject d, Scene& scene) {
   if (!(o.time_step > 0)) d.fail("time_step", "must be > 0");
   if (!(o.duration >= o.time_step)) d.fail("duration", "must be >= time_step");
   const double steps = std::ceil(o.duration / o.time_step - 1e-9);
-  if (!(steps <= kMaxStepIndex + 1)) {
+  if (!(steps <= kMaxSteps)) {
     d.fail("time_step", "duration / time_step asks for " + number_text(steps) +
-                            " steps, more than the " + std::to_string(kMaxStepIndex + 1) +
+                            " steps, more than the " + std::to_string(kMaxSteps) +
                             " a results file holds");
   }
   const bool explicit_scheme =

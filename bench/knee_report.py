@@ -10,12 +10,14 @@ and the sum of the step times.
 """
 
 import csv
-import json
+import os
 import re
 import sys
 
-import h5py
 import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "apps", "tools"))
+from results import Results  # noqa: E402
 
 # The paper: 376 minutes on one 300 MHz R12000; 63 % force and stiffness, 22 % collision
 # detection (tree construction under 1 %), 15 % linear solve.
@@ -39,14 +41,15 @@ def groups_from_log(path):
 
 
 def main(result, log, prefix):
-    with h5py.File(result, "r") as f:
-        names = sorted(f["steps"])
-        scene = json.loads(f["run"].attrs["scene"])
-        status = f["run"].attrs["status"]
-        steps = [f["steps"][n].attrs for n in names]
-        rows = [(a["load"], a["newton_iterations"], a["seconds"], a.get("penetration", np.nan),
-                 a.get("contact_area", np.nan)) for a in steps]
-        phases = dict(f["timing"].attrs) if "timing" in f else {}
+    with Results(result) as r:
+        scene = r.scene()
+        status = r.status
+        missing = np.full(r.num_steps, np.nan)
+        rows = np.column_stack([
+            r.series("load"), r.series("newton_iterations"), r.series("seconds"),
+            r.series("penetration") if r.has("penetration") else missing,
+            r.series("contact_area") if r.has("contact_area") else missing])
+        phases = r.timing()
     total_angle = next(b["angle_deg"] for b in scene["boundary"] if b["type"] == "rotated")
     rows = np.array(rows, float).reshape(-1, 5)
     with open(prefix + "_steps.csv", "w", newline="") as out:

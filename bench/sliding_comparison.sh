@@ -16,16 +16,14 @@ for model in material_depth node_to_surface; do
   seconds=$(echo "$(date +%s.%N) - $start" | bc)
   /usr/bin/python3 - "$tmp/$model.h5" "$model" "$seconds" >> "$out" <<'PY'
 import sys
-import h5py
 import numpy as np
+sys.path.insert(0, "apps/tools")
+from results import Results
 path, model, seconds = sys.argv[1], sys.argv[2], float(sys.argv[3])
-with h5py.File(path, "r") as f:
-    names = sorted(f["steps"])
-    loads = np.array([f["steps"][k].attrs["load"] for k in names])
-    newton = np.array([f["steps"][k].attrs["newton_iterations"] for k in names])
-    status = f["run"].attrs["status"]
+with Results(path) as r:
+    loads, newton, status = r.series("load"), r.series("newton_iterations"), r.status
 increments = np.diff(np.concatenate([[0.0], loads]))
-print(f"{model},{status},{len(names)},{loads[-1]:.4f},{newton.mean():.2f},{newton.max()},"
+print(f"{model},{status},{len(loads)},{loads[-1]:.4f},{newton.mean():.2f},{newton.max()},"
       f"{int((increments < 0.02 - 1e-9).sum())},{seconds:.1f}")
 PY
 done

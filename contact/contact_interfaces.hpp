@@ -44,6 +44,9 @@ class ContactInterfaces {
     std::vector<std::array<double, 2>> areas_;  // per row: first body's surface, second's
   };
 
+  /// The rows' names, in order.
+  const std::vector<std::string>& names() const { return names_; }
+
   /// Appends a zero row per interface to step.contact and returns the tally that fills them.
   Tally tally(StepRecord& step) const { return Tally(*this, step); }
 

@@ -58,6 +58,7 @@ class MaterialDepthContact final : public ForceModule {
   /// with its area and depth integral, goes to the interface's row and to the triangle in
   /// step.surface.
   void report(const Points& x, StepRecord& step) const override;
+  std::vector<std::string> interface_names() const override { return interfaces_.names(); }
 
   /// The active pairs of the last prepare(), in processing order.
   const std::vector<ContactPair>& pairs() const { return pairs_; }

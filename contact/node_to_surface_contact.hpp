@@ -30,6 +30,7 @@ class NodeToSurfaceContact final : public ForceModule {
   /// One row per pair of bodies "a/b" (ContactInterfaces); a pair's area is the boundary area
   /// share of its node.
   void report(const Points& x, StepRecord& step) const override;
+  std::vector<std::string> interface_names() const override { return interfaces_.names(); }
 
   /// Active (node, triangle) pairs of the last prepare(), in processing order (PairSchedule).
   const std::vector<std::pair<Index, Index>>& pairs() const { return pairs_; }

@@ -147,10 +147,16 @@ double ObstacleContact::evaluate(const Points& x, VectorX* gradient,
   });
 }
 
+std::vector<std::string> ObstacleContact::interface_names() const {
+  std::vector<std::string> out;
+  for (const Obstacle& o : obstacles_) out.push_back("obstacle " + o.name);
+  return out;
+}
+
 void ObstacleContact::report(const Points& x, StepRecord& step) const {
   const size_t first = step.contact.size();
-  for (const Obstacle& o : obstacles_)
-    step.contact.push_back({"obstacle " + o.name, Vec3::Zero(), 0, 0});
+  for (std::string& name : interface_names())
+    step.contact.push_back({std::move(name), Vec3::Zero(), 0, 0});
   step.surface.resize(num_mesh_tris_);
   for (const auto& [o, f] : active_) {
     std::array<Vec3, 3> q;

@@ -54,6 +54,8 @@ class ObstacleContact final : public ForceModule {
   /// magnitudes summed over triangles) and the boundary area inside it [m^2] at x; and each
   /// triangle's share in step.surface.
   void report(const Points& x, StepRecord& step) const override;
+  /// "obstacle NAME" per obstacle.
+  std::vector<std::string> interface_names() const override;
 
  private:
   // Energy of triangle f in obstacle o, with its gradient and Hessian where asked for.

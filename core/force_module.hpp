@@ -3,6 +3,7 @@
 
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "core/block_sparse_matrix.hpp"
 #include "core/step_record.hpp"
@@ -59,6 +60,10 @@ class ForceModule {
   /// Adds what this module knows about the converged state x (after prepare(x)) to the step's
   /// record: contact modules append one row per interface, in a fixed order.
   virtual void report(const Points& /*x*/, StepRecord& /*step*/) const {}
+
+  /// The names of the rows report() appends to StepRecord::contact, in their order; known before
+  /// the first step, so that a results file can be laid out up front.
+  virtual std::vector<std::string> interface_names() const { return {}; }
 };
 
 }  // namespace depthfem

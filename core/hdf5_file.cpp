@@ -1,5 +1,10 @@
 #include "core/hdf5_file.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cstring>
 #include <filesystem>
 
 #include "core/error.hpp"
@@ -31,10 +36,12 @@ Handle unlocked_access(const std::string& path) {
 
 H5File H5File::create(const std::string& path) {
   const Handle access = unlocked_access(path);
+  // SWMR writing needs the 1.10 file format (its chunk indices and checksummed metadata).
+  if (H5Pset_libver_bounds(access.id(), H5F_LIBVER_V110, H5F_LIBVER_V110) < 0)
+    throw InputError(located(path, 0, "cannot set up HDF5 file access"));
   // A flush visits every entry of HDF5's metadata cache, which by default grows to megabytes
-  // over a long run, so flushing after every step would cost more and more. The writer closes
-  // each object right after writing it: a fixed cache of 256 KiB (the metadata of about ten
-  // steps) keeps the cost per step flat (bench/bench_results_file.cpp, BM_LongRun).
+  // over a long run, so flushing after every step would cost more and more. A fixed cache of
+  // 256 KiB keeps the cost per step flat (bench/bench_results_file.cpp, BM_LongRun).
   H5AC_cache_config_t cache;
   cache.version = H5AC__CURR_CACHE_CONFIG_VERSION;
   if (H5Pget_mdc_config(access.id(), &cache) < 0)
@@ -54,8 +61,19 @@ H5File H5File::create(const std::string& path) {
 H5File H5File::open(const std::string& path) {
   const Handle access = unlocked_access(path);
   if (!std::filesystem::exists(path)) throw InputError(located(path, 0, "no such results file"));
-  return H5File(path, H5Fopen(path.c_str(), H5F_ACC_RDONLY, access.id()),
+  return H5File(path, H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, access.id()),
                 "cannot be opened as an HDF5 file");
+}
+
+void H5File::rename(const std::string& path) {
+  std::error_code error;
+  std::filesystem::rename(path_, path, error);
+  if (error) fail("cannot be renamed to " + path + ": " + error.message());
+  path_ = path;
+}
+
+void H5File::start_swmr_write() const {
+  check(H5Fstart_swmr_write(file_.id()), "cannot start single-writer/multiple-reader mode");
 }
 
 H5File::H5File(std::string path, hid_t id, const char* failure)
@@ -71,6 +89,34 @@ void H5File::flush() const {
   check(H5Fflush(file_.id(), H5F_SCOPE_GLOBAL), "cannot flush");
 }
 
+H5File::Reservation H5File::reserve(hsize_t bytes) const {
+  const auto [end, descriptor] = end_and_descriptor("cannot reserve disk space");
+  const int error = posix_fallocate(descriptor, end, off_t(bytes));
+  if (error != 0) {
+    give_back();  // what the failed allocation may have added
+    fail("no room for " + std::to_string(bytes / 1024) + " KiB more (" + std::strerror(error) +
+         "); the steps written so far are kept");
+  }
+  return Reservation(*this);
+}
+
+void H5File::give_back() const noexcept {
+  try {
+    const auto [end, descriptor] = end_and_descriptor("");
+    struct stat status {};
+    if (fstat(descriptor, &status) == 0 && status.st_size > end) (void)!ftruncate(descriptor, end);
+  } catch (const InputError&) {
+  }
+}
+
+std::pair<off_t, int> H5File::end_and_descriptor(const std::string& what) const {
+  haddr_t end = 0;
+  void* handle = nullptr;
+  check(H5Fget_eoa(file_.id(), &end), what);
+  check(H5Fget_vfd_handle(file_.id(), H5P_DEFAULT, &handle), what);
+  return {off_t(end), *static_cast<const int*>(handle)};
+}
+
 void H5File::create_group(const std::string& name) const {
   const std::string what = "cannot create group " + name;
   const Handle properties = handle(H5Pcreate(H5P_GROUP_CREATE), H5Pclose, what);
@@ -80,8 +126,125 @@ void H5File::create_group(const std::string& name) const {
          what);
 }
 
-void H5File::remove(const std::string& name) const {
-  check(H5Ldelete(file_.id(), name.c_str(), H5P_DEFAULT), "cannot remove " + name);
+void H5File::create_rows(const std::string& name, hid_t type,
+                         const std::vector<hsize_t>& row_dims) const {
+  const std::string what = "cannot create " + name;
+  std::vector<hsize_t> dims{0}, max_dims{H5S_UNLIMITED}, chunk{1};
+  hsize_t row_bytes = check(hsize_t(H5Tget_size(type)), what);
+  for (const hsize_t d : row_dims) {
+    dims.push_back(d);
+    // A chunk dimension must be positive and, where the dataset cannot grow, within its size.
+    max_dims.push_back(d == 0 ? H5S_UNLIMITED : d);
+    chunk.push_back(std::max<hsize_t>(d, 1));
+    row_bytes *= std::max<hsize_t>(d, 1);
+  }
+  chunk[0] = std::max<hsize_t>(1, 4096 / row_bytes);
+  const Handle space =
+      handle(H5Screate_simple(int(dims.size()), dims.data(), max_dims.data()), H5Sclose, what);
+  const Handle properties = handle(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, what);
+  check(H5Pset_chunk(properties.id(), int(chunk.size()), chunk.data()), what);
+  handle(H5Dcreate2(file_.id(), name.c_str(), type, space.id(), H5P_DEFAULT, properties.id(),
+                    H5P_DEFAULT),
+         H5Dclose, what);
+}
+
+void H5File::write_rows(const std::string& name, hsize_t first, hsize_t count, hid_t memory_type,
+                        const void* data) const {
+  const std::string what = "cannot write " + name;
+  const Handle set = handle(H5Dopen2(file_.id(), name.c_str(), H5P_DEFAULT), H5Dclose, what);
+  std::vector<hsize_t> dims = dataset_dims(set.id(), what);
+  if (dims[0] < first + count) {
+    dims[0] = first + count;
+    check(H5Dset_extent(set.id(), dims.data()), what);
+  }
+  const RowSelection rows = select_rows(set.id(), first, count, what);
+  if (rows.values > 0)
+    check(H5Dwrite(set.id(), memory_type, rows.memory.id(), rows.file.id(), H5P_DEFAULT, data),
+          what);
+}
+
+void H5File::set_rows(const std::string& name, hsize_t rows) const {
+  const std::string what = "cannot resize " + name;
+  const Handle set = handle(H5Dopen2(file_.id(), name.c_str(), H5P_DEFAULT), H5Dclose, what);
+  std::vector<hsize_t> dims = dataset_dims(set.id(), what);
+  dims[0] = rows;
+  check(H5Dset_extent(set.id(), dims.data()), what);
+}
+
+std::vector<double> H5File::read_rows(const std::string& name, hsize_t first, hsize_t count) const {
+  const std::string what = "cannot read " + name;
+  const Handle set = handle(H5Dopen2(file_.id(), name.c_str(), H5P_DEFAULT), H5Dclose, what);
+  const std::vector<hsize_t> dims = dataset_dims(set.id(), what);
+  if (dims.empty() || first + count > dims[0])
+    fail(what + ": rows " + std::to_string(first) + " to " + std::to_string(first + count) +
+         " asked of " + std::to_string(dims.empty() ? 0 : dims[0]));
+  const RowSelection rows = select_rows(set.id(), first, count, what);
+  std::vector<double> out(size_t(rows.values));
+  if (!out.empty())
+    check(H5Dread(set.id(), H5T_NATIVE_DOUBLE, rows.memory.id(), rows.file.id(), H5P_DEFAULT,
+                  out.data()),
+          what);
+  return out;
+}
+
+void H5File::create_text(const std::string& name, size_t capacity) const {
+  const std::string what = "cannot create " + name;
+  const Handle type = fixed_string_type(capacity, what);
+  const Handle space = handle(H5Screate(H5S_SCALAR), H5Sclose, what);
+  // Storage allocated at creation: writing the text later changes no metadata.
+  const Handle properties = handle(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, what);
+  check(H5Pset_layout(properties.id(), H5D_CONTIGUOUS), what);
+  check(H5Pset_alloc_time(properties.id(), H5D_ALLOC_TIME_EARLY), what);
+  handle(H5Dcreate2(file_.id(), name.c_str(), type.id(), space.id(), H5P_DEFAULT, properties.id(),
+                    H5P_DEFAULT),
+         H5Dclose, what);
+}
+
+void H5File::write_text(const std::string& name, const std::string& value) const {
+  const std::string what = "cannot write " + name;
+  const Handle set = handle(H5Dopen2(file_.id(), name.c_str(), H5P_DEFAULT), H5Dclose, what);
+  const Handle type = handle(H5Dget_type(set.id()), H5Tclose, what);
+  std::string buffer = value;
+  buffer.resize(check(H5Tget_size(type.id()), what), '\0');
+  check(H5Dwrite(set.id(), type.id(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buffer.data()), what);
+}
+
+void H5File::create_text_rows(const std::string& name, size_t capacity) const {
+  const Handle type = fixed_string_type(capacity, "cannot create " + name);
+  create_rows(name, type.id(), {});
+}
+
+void H5File::write_text_rows(const std::string& name,
+                             const std::vector<std::string>& values) const {
+  const std::string what = "cannot write " + name;
+  const Handle set = handle(H5Dopen2(file_.id(), name.c_str(), H5P_DEFAULT), H5Dclose, what);
+  const Handle type = handle(H5Dget_type(set.id()), H5Tclose, what);
+  const size_t capacity = check(H5Tget_size(type.id()), what);
+  std::string buffer;
+  for (const std::string& value : values)
+    buffer += (value + std::string(capacity, '\0')).substr(0, capacity);
+  set_rows(name, values.size());
+  write_rows(name, 0, values.size(), type.id(), buffer.data());
+}
+
+std::vector<std::string> H5File::read_texts(const std::string& name) const {
+  const std::string what = "cannot read " + name;
+  const Handle set = handle(H5Dopen2(file_.id(), name.c_str(), H5P_DEFAULT), H5Dclose, what);
+  const Handle type = handle(H5Dget_type(set.id()), H5Tclose, what);
+  if (H5Tget_class(type.id()) != H5T_STRING || H5Tis_variable_str(type.id()) != 0)
+    fail(what + ": not a dataset of fixed-length strings");
+  const size_t capacity = check(H5Tget_size(type.id()), what);
+  const Handle space = handle(H5Dget_space(set.id()), H5Sclose, what);
+  const hssize_t count = check(H5Sget_simple_extent_npoints(space.id()), what);
+  std::string buffer(size_t(count) * capacity, '\0');
+  if (count > 0)
+    check(H5Dread(set.id(), type.id(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buffer.data()), what);
+  std::vector<std::string> out;
+  for (hssize_t k = 0; k < count; ++k) {
+    const std::string text = buffer.substr(size_t(k) * capacity, capacity);
+    out.push_back(text.substr(0, text.find('\0')));
+  }
+  return out;
 }
 
 void H5File::create_zeros(const std::string& name, const std::vector<hsize_t>& dims) const {
@@ -141,10 +304,7 @@ bool H5File::exists(const std::string& name) const {
 std::vector<hsize_t> H5File::dims(const std::string& name) const {
   const std::string what = "cannot read " + name;
   const Handle set = handle(H5Dopen2(file_.id(), name.c_str(), H5P_DEFAULT), H5Dclose, what);
-  const Handle space = handle(H5Dget_space(set.id()), H5Sclose, what);
-  std::vector<hsize_t> out(check(H5Sget_simple_extent_ndims(space.id()), what));
-  check(H5Sget_simple_extent_dims(space.id(), out.data(), nullptr), what);
-  return out;
+  return dataset_dims(set.id(), what);
 }
 
 std::vector<double> H5File::read_doubles(const std::string& name) const {
@@ -179,38 +339,38 @@ std::string H5File::string_attribute(const std::string& object, const std::strin
   return take_string(value);
 }
 
-std::vector<std::string> H5File::link_names(const std::string& group) const {
-  const std::string what = "cannot list " + group;
-  H5G_info_t info;
-  check(H5Gget_info_by_name(file_.id(), group.c_str(), &info, H5P_DEFAULT), what);
-  std::vector<std::string> out;
-  for (hsize_t i = 0; i < info.nlinks; ++i) {
-    const auto name_of = [&](char* buffer, size_t size) {
-      return check(H5Lget_name_by_idx(file_.id(), group.c_str(), H5_INDEX_NAME, H5_ITER_INC, i,
-                                      buffer, size, H5P_DEFAULT),
-                   what);
-    };
-    std::string name(name_of(nullptr, 0), '\0');
-    name_of(name.data(), name.size() + 1);
-    out.push_back(std::move(name));
-  }
-  return out;
-}
-
-std::vector<std::string> H5File::attribute_names(const std::string& object) const {
-  std::vector<std::string> out;
-  const auto append = [](hid_t, const char* name, const H5A_info_t*, void* names) -> herr_t {
-    static_cast<std::vector<std::string>*>(names)->emplace_back(name);
-    return 0;
-  };
-  check(H5Aiterate_by_name(file_.id(), object.c_str(), H5_INDEX_CRT_ORDER, H5_ITER_INC, nullptr,
-                           append, &out, H5P_DEFAULT),
-        "cannot list the attributes of " + object);
-  return out;
-}
-
 Handle H5File::handle(hid_t id, herr_t (*close)(hid_t), const std::string& what) const {
   return Handle(check(id, what), close);
+}
+
+std::vector<hsize_t> H5File::dataset_dims(hid_t set, const std::string& what) const {
+  const Handle space = handle(H5Dget_space(set), H5Sclose, what);
+  std::vector<hsize_t> dims(check(H5Sget_simple_extent_ndims(space.id()), what));
+  check(H5Sget_simple_extent_dims(space.id(), dims.data(), nullptr), what);
+  return dims;
+}
+
+H5File::RowSelection H5File::select_rows(hid_t set, hsize_t first, hsize_t count,
+                                         const std::string& what) const {
+  Handle file = handle(H5Dget_space(set), H5Sclose, what);
+  std::vector<hsize_t> size(check(H5Sget_simple_extent_ndims(file.id()), what));
+  check(H5Sget_simple_extent_dims(file.id(), size.data(), nullptr), what);
+  std::vector<hsize_t> start(size.size(), 0);
+  start[0] = first;
+  size[0] = count;
+  check(H5Sselect_hyperslab(file.id(), H5S_SELECT_SET, start.data(), nullptr, size.data(), nullptr),
+        what);
+  Handle memory = handle(H5Screate_simple(int(size.size()), size.data(), nullptr), H5Sclose, what);
+  const hssize_t values = check(H5Sget_simple_extent_npoints(memory.id()), what);
+  return {std::move(file), std::move(memory), values};
+}
+
+Handle H5File::fixed_string_type(size_t capacity, const std::string& what) const {
+  Handle type = handle(H5Tcopy(H5T_C_S1), H5Tclose, what);
+  check(H5Tset_size(type.id(), capacity), what);
+  check(H5Tset_strpad(type.id(), H5T_STR_NULLPAD), what);
+  check(H5Tset_cset(type.id(), H5T_CSET_UTF8), what);
+  return type;
 }
 
 Handle H5File::string_type(const std::string& what) const {

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -51,22 +52,45 @@ struct H5Type<std::int32_t> {
 /// ("/steps/000001/x"); every failure throws InputError "FILE: cannot ... OBJECT".
 class H5File {
  public:
-  /// Creates (truncates) `path` for writing. Keeps HDF5's default (oldest) file format on purpose:
-  /// the 1.10 format marks a file open for writing in its superblock, and the file of a killed
-  /// run then cannot be opened without `h5clear -s`.
+  /// Creates (truncates) `path` for writing, in the HDF5 1.10 file format that single-writer /
+  /// multiple-reader (SWMR) access needs.
   static H5File create(const std::string& path);
-  /// Opens `path` read-only.
+  /// Opens `path` read-only as a SWMR reader: the file may be one that a writer is still
+  /// writing, one whose writer was killed, or a closed one.
   static H5File open(const std::string& path);
+
+  /// Renames the open file to `path` (same file system), which messages then name.
+  void rename(const std::string& path);
+
+  /// Switches the writer to SWMR mode: from now on readers may open the file while it is
+  /// written, and every flush leaves it consistent for them, but no object (group, dataset,
+  /// attribute) can be created any more; datasets can grow and be written.
+  void start_swmr_write() const;
 
   /// Throws InputError "FILE: WHAT".
   [[noreturn]] void fail(const std::string& what) const;
 
   /// Writes file buffers and metadata to disk, so that the file is complete as it stands.
   void flush() const;
+
+  /// Disk space allocated past the end of what a file uses, given back when it goes out of scope.
+  class Reservation {
+   public:
+    explicit Reservation(const H5File& file) : file_(file) {}
+    Reservation(const Reservation&) = delete;
+    Reservation& operator=(const Reservation&) = delete;
+    ~Reservation() { file_.give_back(); }
+
+   private:
+    const H5File& file_;
+  };
+  /// Allocates `bytes` of disk space past the end of what the file uses, for as long as the
+  /// returned reservation lives, or throws saying the disk is full. Writes that stay within them
+  /// cannot fail for want of space: HDF5 cannot recover from a write that fails half done (the
+  /// file's end recorded past its real end).
+  [[nodiscard]] Reservation reserve(hsize_t bytes) const;
   /// Creates a group that lists its attributes in the order they are written.
   void create_group(const std::string& name) const;
-  /// Removes the link `name` (the space of the object is not reclaimed).
-  void remove(const std::string& name) const;
 
   /// Writes an Eigen vector as a 1D dataset, or a matrix as a 2D row-major dataset.
   template <class Derived>
@@ -81,6 +105,44 @@ class H5File {
                 {hsize_t(row_major.rows()), hsize_t(row_major.cols())}, row_major.data());
     }
   }
+  /// Creates dataset `name` of rows of `row_dims` values of `type` each (no dims: one value per
+  /// row), with no rows yet; write_rows grows it. Chunked by rows, about 4 KiB or one row a
+  /// chunk.
+  void create_rows(const std::string& name, hid_t type, const std::vector<hsize_t>& row_dims) const;
+  /// Writes `count` rows from `first` of a dataset made by create_rows, growing it to
+  /// first + count rows when it has fewer; `data` holds them row-major in `memory_type`.
+  void write_rows(const std::string& name, hsize_t first, hsize_t count, hid_t memory_type,
+                  const void* data) const;
+  /// Writes the values of `a` (row-major) as row `row` of a dataset made by create_rows.
+  template <class Derived>
+  void write_row(const std::string& name, hsize_t row, const Eigen::MatrixBase<Derived>& a) const {
+    using T = typename Derived::Scalar;
+    const Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> row_major = a;
+    write_rows(name, row, 1, H5Type<T>::memory(), row_major.data());
+  }
+  /// Writes `value` as row `row` of a dataset of scalars made by create_rows.
+  template <class T>
+  requires std::is_arithmetic_v<T>
+  void write_row(const std::string& name, hsize_t row, T value) const {
+    write_rows(name, row, 1, H5Type<T>::memory(), &value);
+  }
+  /// Sets the number of rows of a dataset made by create_rows.
+  void set_rows(const std::string& name, hsize_t rows) const;
+  /// Values of rows [first, first + count) of dataset `name` as doubles, row-major.
+  std::vector<double> read_rows(const std::string& name, hsize_t first, hsize_t count) const;
+
+  /// Creates a scalar dataset holding a string of at most `capacity` bytes, written in place by
+  /// write_text (h5py reads it as bytes).
+  void create_text(const std::string& name, size_t capacity) const;
+  /// Writes `value` into a dataset made by create_text, cut to its capacity.
+  void write_text(const std::string& name, const std::string& value) const;
+  /// Creates a dataset of rows of strings of at most `capacity` bytes each, with no rows yet.
+  void create_text_rows(const std::string& name, size_t capacity) const;
+  /// Replaces the rows of a dataset made by create_text_rows by `values`, each cut to its capacity.
+  void write_text_rows(const std::string& name, const std::vector<std::string>& values) const;
+  /// The strings of a dataset made by create_text (one) or create_text_rows.
+  std::vector<std::string> read_texts(const std::string& name) const;
+
   /// Creates a dataset of `dims` doubles that reads as zeros and takes no space in the file: it
   /// is never written, so HDF5 allocates no storage and returns its fill value 0.
   void create_zeros(const std::string& name, const std::vector<hsize_t>& dims) const;
@@ -121,11 +183,6 @@ class H5File {
   /// Scalar string attribute of `object`.
   std::string string_attribute(const std::string& object, const std::string& name) const;
 
-  /// Names of the links in `group`, in increasing name order.
-  std::vector<std::string> link_names(const std::string& group) const;
-  /// Names of the attributes of `object`, in the order they were written.
-  std::vector<std::string> attribute_names(const std::string& object) const;
-
  private:
   H5File(std::string path, hid_t id, const char* failure);
 
@@ -138,6 +195,22 @@ class H5File {
   Handle handle(hid_t id, herr_t (*close)(hid_t), const std::string& what) const;
   /// Variable-length UTF-8 string type (what h5py reads as str).
   Handle string_type(const std::string& what) const;
+  /// UTF-8 strings of `capacity` bytes, padded with NUL.
+  Handle fixed_string_type(size_t capacity, const std::string& what) const;
+  /// Rows [first, first + count) of the open dataset `set`: its file space with them selected,
+  /// a memory space of their shape, and how many values they hold.
+  struct RowSelection {
+    Handle file, memory;
+    hssize_t values;
+  };
+  RowSelection select_rows(hid_t set, hsize_t first, hsize_t count, const std::string& what) const;
+  /// Cuts the file back to the end of the space it uses (errors leave it longer, which is
+  /// harmless).
+  void give_back() const noexcept;
+  /// The end of the space the file uses (HDF5's end of allocation) and its file descriptor.
+  std::pair<off_t, int> end_and_descriptor(const std::string& what) const;
+  /// Dimensions of the open dataset `set`.
+  std::vector<hsize_t> dataset_dims(hid_t set, const std::string& what) const;
   void write_raw(const std::string& name, hid_t file_type, hid_t memory_type,
                  const std::vector<hsize_t>& dims, const void* data) const;
   void write_attribute(const std::string& object, const std::string& name, hid_t file_type,

@@ -5,7 +5,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cstdio>
 #include <filesystem>
 #include <optional>
 #include <utility>
@@ -16,34 +15,41 @@
 namespace depthfem {
 namespace {
 
+/// Bytes of the fixed-length strings: /run/status, /run/message, /timing/phases.
+constexpr size_t kStatusBytes = 16, kMessageBytes = 4096, kPhaseBytes = 64;
+
 /// Opens a results file for reading, checking that it has the groups every results file has.
 H5File open_results(const std::string& path) {
   H5File file = H5File::open(path);
   for (const char* group : {"/mesh", "/run", "/steps"})
     if (!file.exists(group))
       file.fail(std::string("not a depthfem results file (no ") + group + " group)");
+  if (!file.exists("/steps/index"))
+    file.fail("was written by an older depthfem (steps as groups), which this version cannot read");
   return file;
 }
 
-/// "NNNNNN": six digits, so that name order is step order.
-std::string step_name(Index index) {
-  char name[16];
-  std::snprintf(name, sizeof name, "%06d", index);
-  return name;
-}
-/// "/steps/NNNNNN".
-std::string step_group(Index index) {
-  return "/steps/" + step_name(index);
+/// The step indices of the completed steps of a results file, in row order.
+std::vector<Index> step_indices(const H5File& file) {
+  const std::vector<double> index = file.read_rows("/steps/index", 0, file.dims("/steps/index")[0]);
+  return {index.begin(), index.end()};
 }
 
-/// Per-node and per-tet datasets a state group may hold, by the rows they have.
-constexpr const char* kNodeDatasets[] = {"x", "displacement", "v"};
-constexpr const char* kTetDatasets[] = {"stress", "von_mises", "strain", "volume_ratio"};
+/// The row of step `step` in the /steps datasets; throws naming the file when it has no such step.
+hsize_t step_row(const H5File& file, const std::vector<Index>& indices, Index step) {
+  const auto at = std::ranges::lower_bound(indices, step);
+  if (at == indices.end() || *at != step)
+    file.fail("has no step " + std::to_string(step) +
+              (indices.empty() ? std::string(" (no completed steps)")
+                               : " (steps " + std::to_string(indices.front()) + " to " +
+                                     std::to_string(indices.back()) + ")"));
+  return hsize_t(at - indices.begin());
+}
 
 /// The sidecar's blocks: one per body, named after it and its materials, except that a body with
 /// several element regions has one per region, named "BODY/REGION (material)", with the body's
-/// nodes and the region's tets. A single block is the whole mesh (it uses the scene's datasets);
-/// several have their own views.
+/// nodes and the region's tets. A single block is the whole mesh; several have their own tets
+/// (/mesh/blocks/<k>/tets, with block-local node indices).
 std::vector<SidecarBlock> sidecar_blocks(const Mesh& mesh, const RunInfo& info) {
   const auto named = [](const std::string& name, const std::vector<std::string>& materials,
                         size_t k) {
@@ -54,19 +60,21 @@ std::vector<SidecarBlock> sidecar_blocks(const Mesh& mesh, const RunInfo& info) 
   for (size_t b = 0; b < mesh.bodies.size(); ++b) {
     const Body& body = mesh.bodies[b];
     if (body.regions.size() < 2) {
-      blocks.push_back({named(body.name, info.body_materials, b), "", body.num_nodes, body.num_tets,
-                        body.first_node, body.first_tet});
+      blocks.push_back({named(body.name, info.body_materials, b), "/mesh/tets", body.num_nodes,
+                        body.num_tets, body.first_node, body.first_tet});
     } else {
       for (size_t r = 0; r < body.regions.size(); ++r) {
         const Region& here = body.regions[r];
-        blocks.push_back({named(body.name + "/" + here.name, info.region_materials, region + r), "",
-                          body.num_nodes, here.num_tets, body.first_node, here.first_tet});
+        blocks.push_back({named(body.name + "/" + here.name, info.region_materials, region + r),
+                          "/mesh/tets", body.num_nodes, here.num_tets, body.first_node,
+                          here.first_tet});
       }
     }
     region += body.regions.size();
   }
   if (blocks.size() > 1)
-    for (size_t k = 0; k < blocks.size(); ++k) blocks[k].path = "blocks/" + std::to_string(k) + "/";
+    for (size_t k = 0; k < blocks.size(); ++k)
+      blocks[k].tets = "/mesh/blocks/" + std::to_string(k) + "/tets";
   return blocks;
 }
 
@@ -119,8 +127,22 @@ std::vector<StepValue> step_values(const StepRecord& step, bool velocity,
   return out;
 }
 
+/// The sidecars of results file `path`: NAME.xmf for ParaView's Xdmf3 readers (its default for
+/// .xmf), NAME.xdmf2 for its older XDMF Reader; the two readers take different notations for a
+/// part of a dataset.
+std::vector<std::pair<std::filesystem::path, XdmfDialect>> sidecar_paths(
+    const std::filesystem::path& path) {
+  return {{std::filesystem::path(path).replace_extension(".xmf"), XdmfDialect::kXdmf3},
+          {std::filesystem::path(path).replace_extension(".xdmf2"), XdmfDialect::kXdmf2}};
+}
+
 }  // namespace
 
+std::vector<std::string> results_sidecars(const std::string& path) {
+  std::vector<std::string> out;
+  for (const auto& [sidecar, dialect] : sidecar_paths(path)) out.push_back(sidecar.string());
+  return out;
+}
 // The writer's lock on a results file: the hidden file ".NAME.lock" beside it holds an
 // exclusive flock and the writer's process id while the run writes, so that a second run with
 // the same --out is refused before it truncates the file. Removed with the writer.
@@ -162,46 +184,86 @@ class WriterLock {
   int fd_ = -1;
 };
 
+/// The datasets of a step, as rows of /steps/NAME: how many values a row has in each dimension
+/// (none for a scalar).
+struct StepDataset {
+  std::string name;
+  hid_t type;
+  std::vector<hsize_t> row;
+};
+
 struct ResultsFile::State {
-  WriterLock lock;  // taken before the file is created (truncated)
+  WriterLock lock;  // taken before anything is written
   H5File file;
   Points X;  ///< reference positions, for displacements
   Index num_tets = 0;
   TriIndices tris;
   RunInfo info;
-  std::vector<SidecarBlock> blocks;
-  std::optional<XdmfSidecar> sidecar;
+  bool depth = false;  ///< the run has material-depth contact (and reports penetration)
+  std::vector<XdmfSidecar> sidecars;
   Index num_steps = 0;
+  Index last_index = -1;
   Index settling_steps = 0;
-  std::vector<std::string> contact_names;  ///< of the first step; later steps must match
+  hsize_t num_residuals = 0;
+  hsize_t step_reserve = 0;  ///< bytes a step may add to the file, besides its residuals
 
   Index num_nodes() const { return static_cast<Index>(X.rows()); }
 
-  /// Row views blocks/<b>/NAME of every node and tet dataset of `group`, for the sidecar.
-  void write_block_views(const std::string& group) const {
-    if (blocks.size() < 2) return;
-    file.create_group(group + "/blocks");
-    for (size_t b = 0; b < blocks.size(); ++b) {
-      const std::string here = group + "/" + blocks[b].path;
-      file.create_group(here.substr(0, here.size() - 1));
-      const SidecarBlock& block = blocks[b];
-      for (const char* name : kNodeDatasets)
-        if (file.exists(group + "/" + name))
-          file.create_row_view(here + name, group + "/" + name, hsize_t(block.first_node),
-                               hsize_t(block.num_nodes));
-      for (const char* name : kTetDatasets)
-        if (file.exists(group + "/" + name))
-          file.create_row_view(here + name, group + "/" + name, hsize_t(block.first_tet),
-                               hsize_t(block.num_tets));
+  /// Every dataset of /steps this run writes.
+  std::vector<StepDataset> step_datasets() const {
+    const ResultFields& f = info.fields;
+    const hsize_t nodes = hsize_t(num_nodes()), tets = hsize_t(num_tets),
+                  triangles = hsize_t(tris.rows()), interfaces = info.contact_names.size();
+    const hid_t i32 = H5Type<std::int32_t>::file(), f64 = H5Type<double>::file();
+    std::vector<StepDataset> out{{"index", i32, {}},
+                                 {"load", f64, {}},
+                                 {"settling", i32, {}},
+                                 {"newton_iterations", i32, {}},
+                                 {"linear_iterations", i32, {}},
+                                 {"energy", f64, {}},
+                                 {"seconds", f64, {}},
+                                 {"residual_count", i32, {}},
+                                 {"residuals", f64, {}},
+                                 {"reactions", f64, {info.constraint_names.size(), 3}},
+                                 {"x", f64, {nodes, 3}}};
+    if (f.velocity) {
+      out.push_back({"kinetic_energy", f64, {}});
+      out.push_back({"v", f64, {nodes, 3}});
     }
+    if (f.displacement) out.push_back({"displacement", f64, {nodes, 3}});
+    if (interfaces > 0) {
+      out.push_back({"contact_area", f64, {}});
+      out.push_back({"contact_forces", f64, {interfaces, 3}});
+      out.push_back({"contact_force_magnitudes", f64, {interfaces}});
+      out.push_back({"contact_areas", f64, {interfaces}});
+    }
+    if (depth) out.push_back({"penetration", f64, {}});
+    if (f.stress) {
+      out.push_back({"stress", f64, {tets, 6}});
+      out.push_back({"von_mises", f64, {tets}});
+    }
+    if (f.strain) {
+      out.push_back({"strain", f64, {tets, 6}});
+      out.push_back({"volume_ratio", f64, {tets}});
+    }
+    if (f.contact) {
+      out.push_back({"contact_pressure", f64, {triangles}});
+      out.push_back({"contact_traction", f64, {triangles, 3}});
+      out.push_back({"contact_gap", f64, {triangles}});
+      out.push_back({"contact_fraction", f64, {triangles}});
+    }
+    return out;
   }
 };
 
 ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const VectorX& depth,
                          const RunInfo& info) {
   const std::filesystem::path fs_path(path);
-  if (fs_path.extension() == ".xmf")
-    throw InputError(located(path, 0, "a results file must not have the sidecar extension .xmf"));
+  for (const auto& [sidecar, dialect] : sidecar_paths(fs_path))
+    if (fs_path.extension() == sidecar.extension())
+      throw InputError(located(
+          path, 0,
+          "a results file must not have the sidecar extension " + sidecar.extension().string()));
   if (depth.size() != 0 && depth.size() != mesh.num_nodes())
     throw InputError(located(path, 0,
                              "depth has " + std::to_string(depth.size()) + " values, the mesh " +
@@ -211,107 +273,138 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
                              "the initial velocity has " +
                                  std::to_string(info.initial_velocity.rows()) + " rows, the mesh " +
                                  std::to_string(mesh.num_nodes()) + " nodes"));
-  WriterLock lock(path, fs_path.parent_path() / ("." + fs_path.filename().string() + ".lock"));
+  const std::filesystem::path directory = fs_path.parent_path(), name = fs_path.filename();
+  WriterLock lock(path, directory / ("." + name.string() + ".lock"));
+  // The file is built under a hidden name and takes its own name once readers can open it (in
+  // SWMR mode), so that a file of that name is always readable, even when the writer is killed.
+  const std::string staging = (directory / ("." + name.string() + ".partial")).string();
+  std::vector<SidecarBlock> blocks = sidecar_blocks(mesh, info);
   state_ = std::make_unique<State>(State{std::move(lock),
-                                         H5File::create(path),
+                                         H5File::create(staging),
                                          mesh.X,
                                          mesh.num_tets(),
                                          mesh.tris,
                                          info,
-                                         sidecar_blocks(mesh, info),
-                                         {},
-                                         0,
-                                         0,
+                                         depth.size() != 0,
                                          {}});
   State& s = *state_;
-  const H5File& f = s.file;
+  H5File& f = s.file;
   const ResultFields& fields = info.fields;
-
-  f.create_group("/mesh");
-  f.write_array("/mesh/X", mesh.X);
-  f.write_array("/mesh/tets", mesh.tets);
-  f.write_array("/mesh/tris", mesh.tris);
-  f.write_array("/mesh/tet_body", mesh.tet_body);
-  f.write_array("/mesh/tri_body", mesh.tri_body);
-  f.write_array("/mesh/tri_tet", mesh.tri_tet);
-  if (depth.size() != 0) f.write_array("/mesh/depth", depth);
-  std::vector<std::string> body_names;
-  for (const Body& body : mesh.bodies) body_names.push_back(body.name);
-  f.write_strings("/mesh/body_names", body_names);
-  f.write_strings("/mesh/body_materials", info.body_materials);
-  IndexVector tet_region = IndexVector::Constant(mesh.num_tets(), -1);
-  std::vector<std::string> region_names;
-  for (const Body& body : mesh.bodies) {
-    for (const Region& r : body.regions) {
-      tet_region.segment(r.first_tet, r.num_tets).setConstant(Index(region_names.size()));
-      region_names.push_back(r.name);
+  bool renamed = false;
+  try {
+    f.create_group("/mesh");
+    f.write_array("/mesh/X", mesh.X);
+    f.write_array("/mesh/tets", mesh.tets);
+    f.write_array("/mesh/tris", mesh.tris);
+    f.write_array("/mesh/tet_body", mesh.tet_body);
+    f.write_array("/mesh/tri_body", mesh.tri_body);
+    f.write_array("/mesh/tri_tet", mesh.tri_tet);
+    if (depth.size() != 0) f.write_array("/mesh/depth", depth);
+    std::vector<std::string> body_names;
+    for (const Body& body : mesh.bodies) body_names.push_back(body.name);
+    f.write_strings("/mesh/body_names", body_names);
+    f.write_strings("/mesh/body_materials", info.body_materials);
+    IndexVector tet_region = IndexVector::Constant(mesh.num_tets(), -1);
+    std::vector<std::string> region_names;
+    for (const Body& body : mesh.bodies) {
+      for (const Region& r : body.regions) {
+        tet_region.segment(r.first_tet, r.num_tets).setConstant(Index(region_names.size()));
+        region_names.push_back(r.name);
+      }
     }
-  }
-  f.write_array("/mesh/tet_region", tet_region);
-  f.write_strings("/mesh/region_names", region_names);
-  f.write_strings("/mesh/region_materials", info.region_materials);
-  if (!mesh.node_sets.empty()) {
-    f.create_group("/mesh/node_sets");
-    for (const auto& [name, nodes] : mesh.node_sets) {
-      std::string object = name;  // '/' would open a subgroup
-      std::ranges::replace(object, '/', '_');
-      f.write_array("/mesh/node_sets/" + object,
-                    Eigen::Map<const IndexVector>(nodes.data(), Eigen::Index(nodes.size())));
+    f.write_array("/mesh/tet_region", tet_region);
+    f.write_strings("/mesh/region_names", region_names);
+    f.write_strings("/mesh/region_materials", info.region_materials);
+    if (!mesh.node_sets.empty()) {
+      f.create_group("/mesh/node_sets");
+      for (const auto& [set_name, nodes] : mesh.node_sets) {
+        std::string object = set_name;  // '/' would open a subgroup
+        std::ranges::replace(object, '/', '_');
+        f.write_array("/mesh/node_sets/" + object,
+                      Eigen::Map<const IndexVector>(nodes.data(), Eigen::Index(nodes.size())));
+      }
     }
-  }
-  if (s.blocks.size() > 1) {
-    f.create_group("/mesh/blocks");
-    for (const SidecarBlock& block : s.blocks) {
-      const std::string here = "/mesh/" + block.path;
-      f.create_group(here.substr(0, here.size() - 1));
-      f.set_string_attribute(here.substr(0, here.size() - 1), "name", block.name);
-      const TetIndices local =
-          (mesh.tets.middleRows(block.first_tet, block.num_tets).array() - block.first_node)
-              .matrix();
-      f.write_array(here + "tets", local);
-      if (depth.size() != 0)
-        f.create_row_view(here + "depth", "/mesh/depth", hsize_t(block.first_node),
-                          hsize_t(block.num_nodes));
+    if (blocks.size() > 1) {
+      f.create_group("/mesh/blocks");
+      for (const SidecarBlock& block : blocks) {
+        const std::string group = block.tets.substr(0, block.tets.rfind('/'));
+        f.create_group(group);
+        f.set_string_attribute(group, "name", block.name);
+        const TetIndices local =
+            (mesh.tets.middleRows(block.first_tet, block.num_tets).array() - block.first_node)
+                .matrix();
+        f.write_array(block.tets, local);
+      }
     }
-  }
 
-  f.create_group("/run");
-  f.set_string_attribute("/run", "scene", info.scene_json);
-  f.set_string_attribute("/run", "version", info.version);
-  f.set_attribute("/run", "threads", info.threads);
-  f.set_string_attribute("/run", "analysis", info.analysis);
-  f.set_string_attribute("/run", "status", "running");
-  f.set_string_attribute("/run", "message", "");
-  f.write_strings("/run/constraint_names", info.constraint_names);
+    f.create_group("/run");
+    f.set_string_attribute("/run", "scene", info.scene_json);
+    f.set_string_attribute("/run", "version", info.version);
+    f.set_attribute("/run", "threads", info.threads);
+    f.set_string_attribute("/run", "analysis", info.analysis);
+    f.create_text("/run/status", kStatusBytes);
+    f.write_text("/run/status", "running");
+    f.create_text("/run/message", kMessageBytes);
+    f.write_strings("/run/constraint_names", info.constraint_names);
+    f.write_strings("/run/contact_names", info.contact_names);
 
-  // The reference state: what the first step starts from.
-  const hsize_t nodes = hsize_t(mesh.num_nodes()), tets = hsize_t(mesh.num_tets()),
-                tris = hsize_t(mesh.num_tris());
-  f.create_group("/reference");
-  f.create_row_view("/reference/x", "/mesh/X", 0, nodes);
-  if (fields.displacement) f.create_zeros("/reference/displacement", {nodes, 3});
-  if (fields.velocity) f.write_array("/reference/v", info.initial_velocity);
-  if (fields.stress) {
-    f.create_zeros("/reference/stress", {tets, 6});
-    f.create_zeros("/reference/von_mises", {tets});
-  }
-  if (fields.strain) {
-    f.create_zeros("/reference/strain", {tets, 6});
-    f.write_array("/reference/volume_ratio", VectorX::Ones(mesh.num_tets()).eval());
-  }
-  if (fields.contact) {
-    for (const char* name : {"contact_pressure", "contact_gap", "contact_fraction"})
-      f.create_zeros(std::string("/reference/") + name, {tris});
-    f.create_zeros("/reference/contact_traction", {tris, 3});
-  }
-  s.write_block_views("/reference");
+    // The reference state: what the first step starts from.
+    const hsize_t nodes = hsize_t(mesh.num_nodes()), tets = hsize_t(mesh.num_tets()),
+                  tris = hsize_t(mesh.num_tris());
+    f.create_group("/reference");
+    f.create_row_view("/reference/x", "/mesh/X", 0, nodes);
+    if (fields.displacement) f.create_zeros("/reference/displacement", {nodes, 3});
+    if (fields.velocity) f.write_array("/reference/v", info.initial_velocity);
+    if (fields.stress) {
+      f.create_zeros("/reference/stress", {tets, 6});
+      f.create_zeros("/reference/von_mises", {tets});
+    }
+    if (fields.strain) {
+      f.create_zeros("/reference/strain", {tets, 6});
+      f.write_array("/reference/volume_ratio", VectorX::Ones(mesh.num_tets()).eval());
+    }
+    if (fields.contact) {
+      for (const char* field : {"contact_pressure", "contact_gap", "contact_fraction"})
+        f.create_zeros(std::string("/reference/") + field, {tris});
+      f.create_zeros("/reference/contact_traction", {tris, 3});
+    }
 
-  f.create_group("/steps");
-  f.flush();
-  s.sidecar.emplace(std::filesystem::path(fs_path).replace_extension(".xmf").string(),
-                    SidecarLayout{fs_path.filename().string(), mesh.num_nodes(), mesh.num_tris(),
-                                  s.blocks, depth.size() != 0, fields},
-                    SidecarStep{"/reference", 0.0, {}});
+    f.create_group("/steps");
+    // What a step may add to the file: its rows; a new chunk of each small dataset (4 KiB); the
+    // chunk indices (up to a 1024-entry page of each) and other metadata.
+    s.step_reserve = 256 * 1024;
+    for (const StepDataset& d : s.step_datasets()) {
+      f.create_rows("/steps/" + d.name, d.type, d.row);
+      hsize_t bytes = H5Tget_size(d.type);
+      for (const hsize_t n : d.row) bytes *= n;
+      s.step_reserve += bytes + 36 * 1024;
+    }
+    f.create_group("/timing");
+    f.create_text_rows("/timing/phases", kPhaseBytes);
+    f.create_rows("/timing/seconds", H5Type<double>::file(), {});
+
+    f.start_swmr_write();
+    f.flush();
+    f.rename(path);
+    renamed = true;
+    for (const auto& [sidecar, dialect] : sidecar_paths(fs_path)) {
+      s.sidecars.emplace_back(
+          sidecar.string(),
+          SidecarLayout{name.string(), dialect, mesh.num_nodes(), mesh.num_tets(), mesh.num_tris(),
+                        blocks, depth.size() != 0, fields},
+          SidecarStep{-1, 0.0, {}});
+    }
+  } catch (const InputError& e) {
+    std::error_code ignored;
+    std::filesystem::remove(staging, ignored);
+    if (renamed) {  // the file is in place, its sidecars are not: it says why it stays empty
+      try {
+        finish(false, e.what());
+      } catch (const InputError&) {
+      }
+    }
+    throw;
+  }
 }
 
 ResultsFile::~ResultsFile() = default;
@@ -321,25 +414,27 @@ void ResultsFile::append_step(const StepRecord& step, const Points& x, const Poi
   State& s = *state_;
   const H5File& f = s.file;
   const ResultFields& fields = s.info.fields;
-  const std::string group = step_group(step.index);
+  const std::string what = "step " + std::to_string(step.index);
   const auto expect_rows = [&](const char* name, Eigen::Index rows, Eigen::Index expected,
                                const char* of) {
     if (rows != expected)
-      f.fail(group + ": " + name + " has " + std::to_string(rows) + " rows, expected " +
+      f.fail(what + ": " + name + " has " + std::to_string(rows) + " rows, expected " +
              std::to_string(expected) + " (" + of + ")");
   };
   const Eigen::Index num_tets = s.num_tets;
-  if (step.index < 0 || step.index > kMaxStepIndex)
-    f.fail("step index " + std::to_string(step.index) + " is outside 0.." +
-           std::to_string(kMaxStepIndex));
+  if (step.index <= s.last_index)
+    f.fail(what + ": steps must come in increasing order (the last one written was " +
+           std::to_string(s.last_index) + ")");
+  if (s.num_steps >= kMaxSteps)
+    f.fail(what + ": a results file holds at most " + std::to_string(kMaxSteps) + " steps");
   expect_rows("x", x.rows(), s.num_nodes(), "#nodes");
   if (bool(v) != fields.velocity)
-    f.fail(group +
+    f.fail(what +
            (fields.velocity ? ": velocities missing" : ": velocities given to a run without"));
   if (v) expect_rows("v", v->rows(), s.num_nodes(), "#nodes");
   expect_rows("reactions", step.reactions.rows(), Eigen::Index(s.info.constraint_names.size()),
               "#constraints");
-  if ((fields.stress || fields.strain) && !elements) f.fail(group + ": element fields missing");
+  if ((fields.stress || fields.strain) && !elements) f.fail(what + ": element fields missing");
   if (fields.stress) {
     expect_rows("stress", elements->stress.rows(), num_tets, "#tets");
     expect_rows("von_mises", elements->von_mises.rows(), num_tets, "#tets");
@@ -351,80 +446,95 @@ void ResultsFile::append_step(const StepRecord& step, const Points& x, const Poi
   if (fields.contact) expect_rows("surface", step.surface.area.rows(), s.tris.rows(), "#tris");
   std::vector<std::string> contact_names;
   for (const InterfaceForce& c : step.contact) contact_names.push_back(c.name);
-  if (s.num_steps > 0 && contact_names != s.contact_names)
-    f.fail(group + ": the contact interfaces differ from those of the first step");
-  if (f.exists(group)) f.fail(group + " was already written");
+  if (contact_names != s.info.contact_names)
+    f.fail(what + ": its contact interfaces are not those the run declared");
 
-  if (s.num_steps == 0 && !contact_names.empty()) {
-    f.write_strings("/run/contact_names", contact_names);
-    s.contact_names = contact_names;
+  // Every dataset of the step at row k, then the index: a reader counts the rows of
+  // /steps/index, so a step is in the file once its index is. A full disk stops the run before
+  // the step is begun.
+  const H5File::Reservation reserved =
+      f.reserve(s.step_reserve + step.residuals.size() * sizeof(double));
+  const hsize_t k = hsize_t(s.num_steps);
+  f.write_row("/steps/load", k, step.load);
+  f.write_row("/steps/settling", k, std::int32_t(step.settling));
+  f.write_row("/steps/newton_iterations", k, std::int32_t(step.newton_iterations));
+  f.write_row("/steps/linear_iterations", k, std::int32_t(step.linear_iterations));
+  f.write_row("/steps/energy", k, step.energy);
+  f.write_row("/steps/seconds", k, step.seconds);
+  f.write_row("/steps/residual_count", k, std::int32_t(step.residuals.size()));
+  f.write_rows("/steps/residuals", s.num_residuals, step.residuals.size(), H5Type<double>::memory(),
+               step.residuals.data());
+  f.write_row("/steps/reactions", k, step.reactions);
+  f.write_row("/steps/x", k, x);
+  if (fields.displacement) f.write_row("/steps/displacement", k, (x - s.X).eval());
+  if (v) {
+    f.write_row("/steps/v", k, *v);
+    f.write_row("/steps/kinetic_energy", k, step.kinetic_energy);
   }
-  f.create_group(group);
-  f.set_attribute(group, "index", step.index);
-  f.set_attribute(group, "load", step.load);
-  f.set_attribute(group, "settling", std::int32_t(step.settling));
-  f.set_attribute(group, "newton_iterations", step.newton_iterations);
-  f.set_attribute(group, "linear_iterations", step.linear_iterations);
-  f.set_attribute(group, "energy", step.energy);
-  if (v) f.set_attribute(group, "kinetic_energy", step.kinetic_energy);
-  f.set_attribute(group, "seconds", step.seconds);
-  f.write_array(group + "/x", x);
-  if (fields.displacement) f.write_array(group + "/displacement", (x - s.X).eval());
-  if (v) f.write_array(group + "/v", *v);
-  f.write_array(
-      group + "/residuals",
-      Eigen::Map<const VectorX>(step.residuals.data(), Eigen::Index(step.residuals.size())));
-  f.write_array(group + "/reactions", step.reactions);
   if (!step.contact.empty()) {
     const Eigen::Index rows = Eigen::Index(step.contact.size());
     Eigen::Matrix<double, Eigen::Dynamic, 3> forces(rows, 3);
     VectorX magnitudes(rows), areas(rows);
-    for (Eigen::Index k = 0; k < rows; ++k) {
-      forces.row(k) = step.contact[k].force.transpose();
-      magnitudes(k) = step.contact[k].magnitude;
-      areas(k) = step.contact[k].area;
+    for (Eigen::Index c = 0; c < rows; ++c) {
+      forces.row(c) = step.contact[c].force.transpose();
+      magnitudes(c) = step.contact[c].magnitude;
+      areas(c) = step.contact[c].area;
     }
-    f.set_attribute(group, "contact_area", step.contact_area());
-    if (step.penetration) f.set_attribute(group, "penetration", *step.penetration);
-    f.write_array(group + "/contact_forces", forces);
-    f.write_array(group + "/contact_force_magnitudes", magnitudes);
-    f.write_array(group + "/contact_areas", areas);
+    f.write_row("/steps/contact_area", k, step.contact_area());
+    f.write_row("/steps/contact_forces", k, forces);
+    f.write_row("/steps/contact_force_magnitudes", k, magnitudes);
+    f.write_row("/steps/contact_areas", k, areas);
   }
+  if (s.depth)
+    f.write_row("/steps/penetration", k,
+                step.penetration.value_or(std::numeric_limits<double>::quiet_NaN()));
   if (fields.stress) {
-    f.write_array(group + "/stress", elements->stress);
-    f.write_array(group + "/von_mises", elements->von_mises);
+    f.write_row("/steps/stress", k, elements->stress);
+    f.write_row("/steps/von_mises", k, elements->von_mises);
   }
   if (fields.strain) {
-    f.write_array(group + "/strain", elements->strain);
-    f.write_array(group + "/volume_ratio", elements->volume_ratio);
+    f.write_row("/steps/strain", k, elements->strain);
+    f.write_row("/steps/volume_ratio", k, elements->volume_ratio);
   }
   if (fields.contact) {
     const SurfaceFields surface = surface_fields(s.tris, x, step.surface);
-    f.write_array(group + "/contact_pressure", surface.pressure);
-    f.write_array(group + "/contact_traction", surface.traction);
-    f.write_array(group + "/contact_gap", surface.gap);
-    f.write_array(group + "/contact_fraction", surface.fraction);
+    f.write_row("/steps/contact_pressure", k, surface.pressure);
+    f.write_row("/steps/contact_traction", k, surface.traction);
+    f.write_row("/steps/contact_gap", k, surface.gap);
+    f.write_row("/steps/contact_fraction", k, surface.fraction);
   }
-  s.write_block_views(group);
+  f.flush();
+  f.write_row("/steps/index", k, std::int32_t(step.index));
   f.flush();
   ++s.num_steps;
+  s.last_index = step.index;
+  s.num_residuals += step.residuals.size();
   // ParaView shows one state per distinct time: settling steps, all at load 1, follow at 2, 3, ...
   const double time = step.settling ? 1.0 + double(++s.settling_steps) : step.load;
-  s.sidecar->append({group, time, step_values(step, fields.velocity, s.info.constraint_names)});
+  const SidecarStep entry{Index(k), time,
+                          step_values(step, fields.velocity, s.info.constraint_names)};
+  for (XdmfSidecar& sidecar : s.sidecars) sidecar.append(entry);
 }
 
 void ResultsFile::write_timing(const std::vector<std::pair<std::string, double>>& phases) {
   const H5File& f = state_->file;
-  if (f.exists("/timing")) f.remove("/timing");
-  f.create_group("/timing");
-  for (const auto& [phase, seconds] : phases) f.set_attribute("/timing", phase, seconds);
+  const H5File::Reservation reserved = f.reserve(64 * 1024);
+  std::vector<std::string> names;
+  VectorX seconds(Eigen::Index(phases.size()));
+  for (size_t k = 0; k < phases.size(); ++k) {
+    names.push_back(phases[k].first);
+    seconds(Eigen::Index(k)) = phases[k].second;
+  }
+  f.write_text_rows("/timing/phases", names);
+  f.set_rows("/timing/seconds", phases.size());
+  f.write_rows("/timing/seconds", 0, phases.size(), H5Type<double>::memory(), seconds.data());
   f.flush();
 }
 
 void ResultsFile::finish(bool success, const std::string& message) {
   const H5File& f = state_->file;
-  f.set_string_attribute("/run", "status", success ? "completed" : "failed");
-  f.set_string_attribute("/run", "message", message);
+  f.write_text("/run/message", message);
+  f.write_text("/run/status", success ? "completed" : "failed");
   f.flush();
 }
 
@@ -436,59 +546,61 @@ ResultsSummary read_results_summary(const std::string& path) {
   out.num_tris = static_cast<Index>(file.dims("/mesh/tris").at(0));
   out.body_names = file.read_strings("/mesh/body_names");
   out.analysis = file.string_attribute("/run", "analysis");
-  out.status = file.string_attribute("/run", "status");
-  out.message = file.string_attribute("/run", "message");
+  out.status = file.read_texts("/run/status").at(0);
+  out.message = file.read_texts("/run/message").at(0);
   out.version = file.string_attribute("/run", "version");
   out.threads = file.attribute<int>("/run", "threads");
-  const std::vector<std::string> steps = file.link_names("/steps");
-  out.num_steps = static_cast<Index>(steps.size());
-  for (const std::string& name : steps) {
-    const std::string group = "/steps/" + name;
-    out.total_newton_iterations += file.attribute<int>(group, "newton_iterations");
-    out.total_linear_iterations += file.attribute<int>(group, "linear_iterations");
-    out.last_load = file.attribute<double>(group, "load");
-  }
-  if (file.exists("/timing"))
-    for (const std::string& phase : file.attribute_names("/timing"))
-      out.timing.emplace_back(phase, file.attribute<double>("/timing", phase));
+  const hsize_t n = file.dims("/steps/index")[0];
+  out.num_steps = static_cast<Index>(n);
+  for (const double k : file.read_rows("/steps/newton_iterations", 0, n))
+    out.total_newton_iterations += long(k);
+  for (const double k : file.read_rows("/steps/linear_iterations", 0, n))
+    out.total_linear_iterations += long(k);
+  if (n > 0) out.last_load = file.read_rows("/steps/load", n - 1, 1)[0];
+  const std::vector<std::string> phases = file.read_texts("/timing/phases");
+  const std::vector<double> seconds =
+      file.read_rows("/timing/seconds", 0, file.dims("/timing/seconds")[0]);
+  for (size_t k = 0; k < std::min(phases.size(), seconds.size()); ++k)
+    out.timing.emplace_back(phases[k], seconds[k]);
   return out;
 }
 
 Eigen::MatrixXd read_step_dataset(const std::string& path, Index step, const std::string& name) {
   const H5File file = open_results(path);
-  const std::string group = step_group(step);
-  if (!file.exists(group)) file.fail("has no step " + std::to_string(step));
-  const std::string dataset = group + "/" + name;
-  if (!file.exists(dataset)) file.fail("has no dataset " + dataset);
+  const std::vector<Index> indices = step_indices(file);
+  const hsize_t row = step_row(file, indices, step);
+  const std::string dataset = "/steps/" + name;
+  if (name == "index" || !file.exists(dataset)) file.fail("has no dataset " + dataset);
+  if (name == "residuals") {
+    const std::vector<double> counts = file.read_rows("/steps/residual_count", 0, row + 1);
+    hsize_t first = 0;
+    for (hsize_t k = 0; k < row; ++k) first += hsize_t(counts[k]);
+    const std::vector<double> values = file.read_rows(dataset, first, hsize_t(counts[row]));
+    return Eigen::Map<const VectorX>(values.data(), Eigen::Index(values.size()));
+  }
   const std::vector<hsize_t> dims = file.dims(dataset);
-  if (dims.empty() || dims.size() > 2) file.fail(dataset + " is not a 1D or 2D dataset");
-  const std::vector<double> values = file.read_doubles(dataset);
+  if (dims.size() > 3) file.fail(dataset + " is not a series of scalars, vectors or matrices");
+  const std::vector<double> values = file.read_rows(dataset, row, 1);
   return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-      values.data(), Eigen::Index(dims[0]), dims.size() == 2 ? Eigen::Index(dims[1]) : 1);
+      values.data(), dims.size() > 1 ? Eigen::Index(dims[1]) : 1,
+      dims.size() > 2 ? Eigen::Index(dims[2]) : 1);
 }
 
 Points read_step_positions(const std::string& path, Index step) {
-  const Eigen::MatrixXd x = read_step_dataset(path, step, "x");
-  if (x.cols() != 3) throw InputError(located(path, 0, step_group(step) + "/x is not #nodes x 3"));
-  return x;
+  return read_step_dataset(path, step, "x");
 }
 
 StepState read_step_state(const std::string& path, Index step) {
+  const H5File file = open_results(path);
+  const std::vector<Index> indices = step_indices(file);
+  if (indices.empty()) file.fail("has no completed step to restart from");
   StepState out;
-  {
-    const H5File file = open_results(path);
-    const std::vector<std::string> steps =
-        file.exists("/steps") ? file.link_names("/steps") : std::vector<std::string>();
-    if (steps.empty()) file.fail("has no completed step to restart from");
-    out.index = step < 0 ? std::stoll(steps.back()) : step;
-    const std::string group = step_group(out.index);
-    if (!file.exists(group))
-      file.fail("has no step " + std::to_string(out.index) + " (steps " +
-                std::to_string(std::stoll(steps.front())) + " to " +
-                std::to_string(std::stoll(steps.back())) + ")");
-    out.load = file.attribute<double>(group, "load");
-  }
-  out.x = read_step_positions(path, out.index);
+  out.index = step < 0 ? indices.back() : step;
+  const hsize_t row = step_row(file, indices, out.index);
+  out.load = file.read_rows("/steps/load", row, 1)[0];
+  const std::vector<double> x = file.read_rows("/steps/x", row, 1);
+  out.x = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
+      x.data(), Eigen::Index(x.size() / 3), 3);
   return out;
 }
 

@@ -1,32 +1,39 @@
 #pragma once
-/// HDF5 results file of a run (mesh, run metadata, the reference state, one group per step,
-/// timing) with an XDMF sidecar for ParaView, and the reading back of what `depthfem info`, the
-/// tests and the tools need. apps/README.md documents every dataset (name, shape, units).
+/// HDF5 results file of a run (mesh, run metadata, the reference state, the steps, timing) with
+/// XDMF sidecars for ParaView, and the reading back of what `depthfem info`, the tests and the
+/// tools need. apps/README.md documents every dataset (name, shape, units).
 ///
-/// Layout (datasets row-major; strings variable-length UTF-8):
+/// The file is written in HDF5's single-writer/multiple-reader (SWMR) mode: every object exists
+/// from the start, and a step adds one row to each dataset of /steps. After each step the file is
+/// flushed in an order that keeps it consistent at every moment, so a reader (opened as a SWMR
+/// reader: h5py.File(path, "r", swmr=True), or any reader once the writer has closed it) sees
+/// every completed step, during the run and after a killed one.
+///
+/// Layout (datasets row-major; variable-length strings UTF-8):
 ///   /mesh: X, tets, tris, tet_body, tri_body, tri_tet, body_names, body_materials, tet_region,
 ///   region_names, region_materials (the element regions of all bodies, body after body), depth
 ///   (with material-depth contact only), node_sets/NAME (named node sets of the meshes, '/' in
-///   NAME written '_'); with several sidecar blocks also blocks/<k>/tets (body-local node
-///   indices) and blocks/<k>/depth (a view);
-///   /run attributes scene, version, threads, analysis, status ("running", "completed",
-///   "failed"), message; datasets constraint_names, contact_names (with the first step);
-///   /reference: the state before the first step, laid out like a step (x, and the fields the
-///   run writes: zeros where they vanish, the initial velocity, volume ratio 1);
-///   /steps/NNNNNN (6-digit step index): attributes index, load, settling, newton_iterations,
-///   linear_iterations, energy, seconds, kinetic_energy (with velocities), contact_area (with
-///   contact), penetration (with material-depth contact); datasets x, displacement, v, residuals,
-///   reactions, contact_forces, contact_force_magnitudes, contact_areas, stress, von_mises, strain,
-///   volume_ratio, contact_pressure, contact_traction, contact_gap, contact_fraction (those the run
-///   writes); with several sidecar blocks, blocks/<k>/ row views of the node and tet datasets;
-///   /timing attributes, one f64 [s] per phase, in the order given.
-/// The sidecar's blocks: one per body, except that a body with several element regions has one
-/// per region (the body's nodes, the region's tets). Views are HDF5 virtual datasets of rows of
-/// this file: they let the sidecar give every block its own grid, which ParaView's XDMF readers
-/// cannot cut out of the scene-wide arrays. The
-/// sidecar's time of a step is its load (time-dependent runs: its time); ParaView shows one
-/// state per distinct time, so the settling steps of a static run, all at load 1, get times
-/// 2, 3, ...
+///   NAME written '_'); with several sidecar blocks also blocks/<k>/tets (block-local node
+///   indices; attribute name);
+///   /run attributes scene, version, threads, analysis; datasets status ("running",
+///   "completed", "failed") and message (fixed-length strings, rewritten in place),
+///   constraint_names, contact_names;
+///   /reference: the state before the first step (x, and the fields the run writes: zeros where
+///   they vanish, the initial velocity, volume ratio 1);
+///   /steps: one row per completed step in each dataset, the step's row k: index (its step
+///   index, written last: the number of rows of /steps/index is the number of completed steps;
+///   other datasets may hold one more row, of a step not completed), load, settling,
+///   newton_iterations, linear_iterations, energy, seconds, residual_count, residuals (all steps'
+///   residuals one after the other, residual_count of them per step), reactions, x, and those the
+///   run writes: displacement, v, kinetic_energy (with velocities), contact_area,
+///   contact_forces, contact_force_magnitudes, contact_areas (with contact interfaces),
+///   penetration (with material-depth contact), stress, von_mises, strain, volume_ratio,
+///   contact_pressure, contact_traction, contact_gap, contact_fraction;
+///   /timing: phases (names) and seconds, one row per phase, rewritten after every step.
+/// The sidecars' blocks: one per body, except that a body with several element regions has one
+/// per region (the body's nodes, the region's tets). The sidecar's time of a step is its load
+/// (time-dependent runs: its time); ParaView shows one state per distinct time, so the settling
+/// steps of a static run, all at load 1, get times 2, 3, ...
 
 #include <memory>
 #include <string>
@@ -39,8 +46,9 @@
 
 namespace depthfem {
 
-/// The largest step index a results file holds (step groups are named with six digits).
-inline constexpr Index kMaxStepIndex = 999999;
+/// The most steps a results file holds: a bound that keeps a mistaken time step from writing
+/// without end (the scene reader refuses a run that asks for more).
+inline constexpr Index kMaxSteps = 1000000;
 
 /// Metadata of a run written to /run at creation, and what its steps will hold.
 struct RunInfo {
@@ -49,7 +57,9 @@ struct RunInfo {
   std::string analysis;                       ///< "static", "dynamic", ...
   int threads = 1;                            ///< worker threads of the run
   std::vector<std::string> constraint_names;  ///< one per boundary condition, the reaction rows
-  std::vector<std::string> body_materials;    ///< per body: material model name or "rigid"
+  /// One per contact interface, in the order every step reports them (StepRecord::contact).
+  std::vector<std::string> contact_names;
+  std::vector<std::string> body_materials;  ///< per body: material model name or "rigid"
   /// Per element region of the mesh (Body::regions, body after body): its material model name
   /// or "rigid".
   std::vector<std::string> region_materials;
@@ -58,29 +68,30 @@ struct RunInfo {
 };
 
 /// Writes a results file. Every call leaves the file flushed and complete up to that call, so a
-/// run that dies keeps all completed steps (its status stays "running"). The sidecar (the path
-/// with extension ".xmf") names the HDF5 file relatively and grows by one entry per step, at a
-/// cost that does not depend on the number of steps before. The file is opened without HDF5
-/// file locks, so that other processes can read it during the run. All failures throw
-/// InputError naming the results file and the object at fault.
+/// run that dies keeps all completed steps (its status stays "running"). The sidecars (the path
+/// with extensions ".xmf" and ".xdmf2", see results_sidecars) name the HDF5 file relatively and
+/// grow by one entry per step, at a cost that does not depend on the number of steps before.
+/// A lock file beside the results refuses a second writer. All failures throw InputError naming
+/// the results file and the object at fault.
 class ResultsFile {
  public:
-  /// Creates (truncates) `path` and writes /mesh, /run and /reference; `depth` is #nodes [m], or
-  /// empty when the run has no material-depth contact (no /mesh/depth then).
+  /// Writes /mesh, /run, /reference and the empty datasets of /steps and /timing into a hidden
+  /// file beside `path`, which then replaces `path`; `depth` is #nodes [m], or empty when the
+  /// run has no material-depth contact (no /mesh/depth then).
   ResultsFile(const std::string& path, const Mesh& mesh, const VectorX& depth, const RunInfo& info);
   /// Closes the file; the status is left as the last `finish` set it ("running" without one).
   ~ResultsFile();
   ResultsFile(const ResultsFile&) = delete;
   ResultsFile& operator=(const ResultsFile&) = delete;
 
-  /// Writes /steps/<index> with positions x, velocities v (exactly when info.fields.velocity;
-  /// null otherwise) and the element fields the run writes (`elements`: null when it writes
-  /// none). Throws if that step exists, an array does not match the mesh, a field the run writes
-  /// is missing (step.surface for contact fields), or the contact interfaces differ from those
-  /// of the first step.
+  /// Adds a step with positions x, velocities v (exactly when info.fields.velocity; null
+  /// otherwise) and the element fields the run writes (`elements`: null when it writes none).
+  /// Throws if its index is not above the last one's, an array does not match the mesh, a field
+  /// the run writes is missing (step.surface for contact fields), or the contact interfaces are
+  /// not info.contact_names.
   void append_step(const StepRecord& step, const Points& x, const Points* v,
                    const ElementFields* elements = nullptr);
-  /// (Re)writes /timing with one attribute per (phase name, seconds), in this order.
+  /// (Re)writes /timing with one row per (phase name, seconds), in this order.
   void write_timing(const std::vector<std::pair<std::string, double>>& phases);
   /// Sets /run status to "completed" (success) or "failed", and /run message.
   void finish(bool success, const std::string& message);
@@ -106,11 +117,15 @@ struct ResultsSummary {
 /// HDF5, or not a depthfem results file.
 ResultsSummary read_results_summary(const std::string& path);
 
-/// Dataset `name` of group /steps/<step> ("x", "stress", ...) as #rows x #columns (one column
-/// for a 1D dataset); throws InputError naming file, step and dataset if absent.
+/// The sidecars of results file `path`, the paths the writer writes beside it.
+std::vector<std::string> results_sidecars(const std::string& path);
+
+/// Row of step `step` (its index) of dataset /steps/NAME ("x", "stress", "load", "residuals",
+/// ...) as #rows x #columns (one column for a series of vectors, 1 x 1 for scalars); throws
+/// InputError naming file, step and dataset if absent.
 Eigen::MatrixXd read_step_dataset(const std::string& path, Index step, const std::string& name);
 
-/// Positions /steps/<step>/x (#nodes x 3 [m]); throws InputError naming file and step if absent.
+/// Positions x of step `step` (#nodes x 3 [m]); throws InputError naming file and step if absent.
 Points read_step_positions(const std::string& path, Index step);
 
 /// A completed step read back to restart a run from it.

@@ -55,30 +55,49 @@ constexpr AttributeKind kNodeScalar{"Scalar", "Node", 0}, kNodeVector{"Vector", 
     // yz, xz.
     kCellSymmetric{"Matrix", "Cell", 6};
 
+/// The values a grid reads from a dataset: rows [first, first + count) of a dataset of `rows`
+/// rows of `columns` values (0: one value a row), or of row `step` of a /steps dataset whose
+/// rows are such arrays.
+struct Part {
+  std::string dataset;
+  Index rows = 0, first = 0, count = 0;
+  int columns = 0;
+  Index step = -1;  ///< row of a /steps dataset; -1: the dataset is the array itself
+
+  /// All rows of a dataset that is the array itself.
+  static Part whole(std::string dataset, Index rows, int columns) {
+    return {std::move(dataset), rows, 0, rows, columns, -1};
+  }
+};
+
+/// Space-separated numbers.
+std::string joined(const std::vector<Index>& values) {
+  std::string out;
+  for (const Index v : values) out += (out.empty() ? "" : " ") + std::to_string(v);
+  return out;
+}
+
 /// Appends the XML of one grid of a state.
 class GridText {
  public:
-  GridText(std::string& out, const std::string& h5_name) : out_(out), h5_(xml_escaped(h5_name)) {}
+  GridText(std::string& out, const SidecarLayout& layout)
+      : out_(out), h5_(xml_escaped(layout.h5_name)), dialect_(layout.dialect) {}
 
   void open(const std::string& name) {
     out_ += "        <Grid Name=\"" + xml_escaped(name) + "\" GridType=\"Uniform\">\n";
   }
-  void topology(const char* type, Index cells, int corners, const std::string& dataset) {
+  void topology(const char* type, const Part& cells) {
     out_ += "          <Topology TopologyType=\"" + std::string(type) + "\" NumberOfElements=\"" +
-            std::to_string(cells) + "\">" +
-            item(std::to_string(cells) + " " + std::to_string(corners), "Int", 4, dataset) +
-            "</Topology>\n";
+            std::to_string(cells.count) + "\">" + item(cells, "Int", 4) + "</Topology>\n";
   }
-  void geometry(Index nodes, const std::string& dataset) {
-    out_ += "          <Geometry GeometryType=\"XYZ\">" +
-            item(std::to_string(nodes) + " 3", "Float", 8, dataset) + "</Geometry>\n";
+  void geometry(const Part& nodes) {
+    out_ += "          <Geometry GeometryType=\"XYZ\">" + item(nodes, "Float", 8) + "</Geometry>\n";
   }
-  /// An attribute read from `dataset`, #rows values (x columns) of `number` type.
-  void attribute(const std::string& name, AttributeKind kind, Index rows,
-                 const std::string& dataset, const char* number = "Float", int bytes = 8) {
-    const std::string dims =
-        std::to_string(rows) + (kind.columns ? " " + std::to_string(kind.columns) : "");
-    out_ += begin_attribute(name, kind) + item(dims, number, bytes, dataset) + "</Attribute>\n";
+  /// An attribute read from `values`, of `number` type.
+  void attribute(const std::string& name, AttributeKind kind, Part values,
+                 const char* number = "Float", int bytes = 8) {
+    values.columns = kind.columns;
+    out_ += begin_attribute(name, kind) + item(values, number, bytes) + "</Attribute>\n";
   }
   /// A field-data attribute with its values written into the XML.
   void value(const StepValue& v) {
@@ -94,11 +113,37 @@ class GridText {
   void close() { out_ += "        </Grid>\n"; }
 
  private:
-  std::string item(const std::string& dims, const char* number, int bytes,
-                   const std::string& dataset) const {
-    return "<DataItem Dimensions=\"" + dims + "\" NumberType=\"" + number + "\" Precision=\"" +
-           std::to_string(bytes) + "\" Format=\"HDF\">" + h5_ + ":" + xml_escaped(dataset) +
-           "</DataItem>";
+  /// The DataItem of `part`: the dataset itself where the part is all of it, else a selection
+  /// in the sidecar's dialect. The dimensions of a /steps dataset are stated as they are at
+  /// this step (step + 1 rows): ParaView's readers take the part from the dataset as it is
+  /// (a row of a /steps dataset is a selection even in its first step: the dataset grows).
+  std::string item(const Part& part, const char* number, int bytes) const {
+    std::vector<Index> shape{part.count}, start{part.first}, count{part.count}, dims{part.rows};
+    if (part.columns) {
+      for (std::vector<Index>* v : {&shape, &count, &dims}) v->push_back(part.columns);
+      start.push_back(0);
+    }
+    if (part.step >= 0) {
+      start.insert(start.begin(), part.step);
+      count.insert(count.begin(), 1);
+      dims.insert(dims.begin(), part.step + 1);
+    }
+    const std::string type = "NumberType=\"" + std::string(number) + "\" Precision=\"" +
+                             std::to_string(bytes) + "\" Format=\"HDF\">";
+    const std::string source = h5_ + ":" + xml_escaped(part.dataset);
+    if (part.step < 0 && part.first == 0 && part.count == part.rows)
+      return "<DataItem Dimensions=\"" + joined(shape) + "\" " + type + source + "</DataItem>";
+    const std::vector<Index> stride(start.size(), 1);
+    if (dialect_ == XdmfDialect::kXdmf3) {
+      return "<DataItem Dimensions=\"" + joined(shape) + "\" " + type + source + "|" +
+             joined(start) + ":" + joined(stride) + ":" + joined(count) + ":" + joined(dims) +
+             "</DataItem>";
+    }
+    return "<DataItem ItemType=\"HyperSlab\" Dimensions=\"" + joined(shape) +
+           "\" Type=\"HyperSlab\"><DataItem Dimensions=\"3 " + std::to_string(start.size()) +
+           "\" Format=\"XML\">" + joined(start) + " " + joined(stride) + " " + joined(count) +
+           "</DataItem><DataItem Dimensions=\"" + joined(dims) + "\" " + type + source +
+           "</DataItem></DataItem>";
   }
   static std::string begin_attribute(const std::string& name, AttributeKind kind) {
     return "          <Attribute Name=\"" + xml_escaped(name) + "\" AttributeType=\"" + kind.type +
@@ -107,6 +152,7 @@ class GridText {
 
   std::string& out_;
   std::string h5_;
+  XdmfDialect dialect_;
 };
 
 /// Replaces `path` by `text` through a temporary file and a rename, so that it is never partial.
@@ -117,7 +163,10 @@ void write_file_atomically(const std::string& path, const std::string& text) {
   out.close();
   std::error_code error;
   if (out) std::filesystem::rename(temporary, path, error);
-  if (!out || error) throw InputError(located(path, 0, "cannot write XDMF sidecar"));
+  if (!out || error) {
+    std::filesystem::remove(temporary, error);
+    throw InputError(located(path, 0, "cannot write XDMF sidecar"));
+  }
 }
 
 }  // namespace
@@ -128,7 +177,9 @@ XdmfSidecar::XdmfSidecar(std::string path, SidecarLayout layout, const SidecarSt
       "<?xml version=\"1.0\" ?>\n"
       "<!-- depthfem results: ParaView reads " +
       xml_escaped(layout_.h5_name) +
-      " through this file (XDMF Reader, or Xdmf3 Reader T for named blocks) -->\n"
+      (layout_.dialect == XdmfDialect::kXdmf3
+           ? " through this file with its Xdmf3 readers (Xdmf3 Reader T names the blocks) -->\n"
+           : " through this file with its XDMF Reader -->\n") +
       "<Xdmf Version=\"3.0\">\n  <Domain>\n"
       "    <Grid Name=\"states\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
   text += state(reference);
@@ -150,41 +201,58 @@ void XdmfSidecar::append(const SidecarStep& step) {
 std::string XdmfSidecar::state(const SidecarStep& step) const {
   const SidecarLayout& l = layout_;
   const ResultFields& f = l.fields;
-  const std::string& g = step.group;
-  std::string out = "      <Grid Name=\"" + xml_escaped(g.substr(g.rfind('/') + 1)) +
+  const std::string name = step.row < 0 ? "reference" : "step_" + std::to_string(step.row);
+  std::string out = "      <Grid Name=\"" + name +
                     "\" GridType=\"Collection\" CollectionType=\"Spatial\">\n" +
                     "        <Time Value=\"" + shortest(step.time) + "\"/>\n";
-  GridText grid(out, l.h5_name);
+  // Rows [first, first + count) of a per-node or per-tet field of this state.
+  const auto field = [&](const char* dataset, Index rows, Index first, Index count) {
+    return step.row < 0 ? Part{std::string("/reference/") + dataset, rows, first, count, 0, -1}
+                        : Part{std::string("/steps/") + dataset, rows, first, count, 0, step.row};
+  };
+  const auto node_field = [&](const char* dataset, const SidecarBlock& b) {
+    return field(dataset, l.num_nodes, b.first_node, b.num_nodes);
+  };
+  const auto tet_field = [&](const char* dataset, const SidecarBlock& b) {
+    return field(dataset, l.num_tets, b.first_tet, b.num_tets);
+  };
+  GridText grid(out, l);
   for (const SidecarBlock& b : l.blocks) {
-    const std::string here = g + "/" + b.path;
     grid.open(b.name);
-    grid.topology("Tetrahedron", b.num_tets, 4, "/mesh/" + b.path + "tets");
-    grid.geometry(b.num_nodes, here + "x");
-    if (f.displacement)
-      grid.attribute("displacement", kNodeVector, b.num_nodes, here + "displacement");
-    if (f.velocity) grid.attribute("velocity", kNodeVector, b.num_nodes, here + "v");
-    if (l.depth) grid.attribute("depth", kNodeScalar, b.num_nodes, "/mesh/" + b.path + "depth");
+    grid.topology("Tetrahedron", Part::whole(b.tets, b.num_tets, 4));
+    Part x = node_field("x", b);
+    x.columns = 3;
+    grid.geometry(x);
+    if (f.displacement) grid.attribute("displacement", kNodeVector, node_field("displacement", b));
+    if (f.velocity) grid.attribute("velocity", kNodeVector, node_field("v", b));
+    if (l.depth)
+      grid.attribute("depth", kNodeScalar,
+                     {"/mesh/depth", l.num_nodes, b.first_node, b.num_nodes, 0, -1});
     if (f.stress) {
-      grid.attribute("stress", kCellSymmetric, b.num_tets, here + "stress");
-      grid.attribute("von_mises", kCellScalar, b.num_tets, here + "von_mises");
+      grid.attribute("stress", kCellSymmetric, tet_field("stress", b));
+      grid.attribute("von_mises", kCellScalar, tet_field("von_mises", b));
     }
     if (f.strain) {
-      grid.attribute("strain", kCellSymmetric, b.num_tets, here + "strain");
-      grid.attribute("volume_ratio", kCellScalar, b.num_tets, here + "volume_ratio");
+      grid.attribute("strain", kCellSymmetric, tet_field("strain", b));
+      grid.attribute("volume_ratio", kCellScalar, tet_field("volume_ratio", b));
     }
     grid.close();
   }
+  const auto whole = [&](const char* dataset, Index rows) { return field(dataset, rows, 0, rows); };
   grid.open("boundary");
-  grid.topology("Triangle", l.num_tris, 3, "/mesh/tris");
-  grid.geometry(l.num_nodes, g + "/x");
-  grid.attribute("body", kCellScalar, l.num_tris, "/mesh/tri_body", "Int", 4);
-  if (f.displacement) grid.attribute("displacement", kNodeVector, l.num_nodes, g + "/displacement");
-  if (l.depth) grid.attribute("depth", kNodeScalar, l.num_nodes, "/mesh/depth");
+  grid.topology("Triangle", Part::whole("/mesh/tris", l.num_tris, 3));
+  Part x = whole("x", l.num_nodes);
+  x.columns = 3;
+  grid.geometry(x);
+  grid.attribute("body", kCellScalar, Part::whole("/mesh/tri_body", l.num_tris, 0), "Int", 4);
+  if (f.displacement)
+    grid.attribute("displacement", kNodeVector, whole("displacement", l.num_nodes));
+  if (l.depth) grid.attribute("depth", kNodeScalar, Part::whole("/mesh/depth", l.num_nodes, 0));
   if (f.contact) {
-    grid.attribute("contact_pressure", kCellScalar, l.num_tris, g + "/contact_pressure");
-    grid.attribute("contact_traction", kCellVector, l.num_tris, g + "/contact_traction");
-    grid.attribute("contact_gap", kCellScalar, l.num_tris, g + "/contact_gap");
-    grid.attribute("contact_fraction", kCellScalar, l.num_tris, g + "/contact_fraction");
+    grid.attribute("contact_pressure", kCellScalar, whole("contact_pressure", l.num_tris));
+    grid.attribute("contact_traction", kCellVector, whole("contact_traction", l.num_tris));
+    grid.attribute("contact_gap", kCellScalar, whole("contact_gap", l.num_tris));
+    grid.attribute("contact_fraction", kCellScalar, whole("contact_fraction", l.num_tris));
   }
   for (const StepValue& v : step.values) grid.value(v);
   grid.close();

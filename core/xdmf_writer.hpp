@@ -25,18 +25,25 @@ struct ResultFields {
 /// nodes): a contiguous range of the scene's nodes and one of its tets.
 struct SidecarBlock {
   std::string name;  ///< the block's name in ParaView
-  /// Where the block's datasets lie below /mesh and below each step group: "" for a block that
-  /// is the whole mesh (the datasets themselves), else "blocks/<k>/" (tets with block-local node
-  /// indices, and row views of the node and tet datasets).
-  std::string path;
+  /// Dataset of its tets with block-local node indices: "/mesh/tets" for a block that is the
+  /// whole mesh, else "/mesh/blocks/<k>/tets".
+  std::string tets;
   Index num_nodes = 0, num_tets = 0;
   Index first_node = 0, first_tet = 0;  ///< its first rows in the scene's node and tet datasets
+};
+
+/// How a sidecar names a part of a dataset (a step's row of a /steps dataset, a block's rows):
+/// ParaView's Xdmf3 readers and its older XDMF Reader each read only their own notation.
+enum class XdmfDialect {
+  kXdmf3,  ///< "FILE:DATASET|start:stride:count:dimensions" (Xdmf3 Reader S and T)
+  kXdmf2,  ///< a DataItem of ItemType HyperSlab (XDMF Reader)
 };
 
 /// What the sidecar lists from a results file.
 struct SidecarLayout {
   std::string h5_name;  ///< the results file, as the sidecar names it (relative to the sidecar)
-  Index num_nodes = 0, num_tris = 0;
+  XdmfDialect dialect = XdmfDialect::kXdmf3;
+  Index num_nodes = 0, num_tets = 0, num_tris = 0;
   std::vector<SidecarBlock> blocks;
   bool depth = false;  ///< /mesh/depth exists
   ResultFields fields;
@@ -50,8 +57,8 @@ struct StepValue {
 
 /// One state the sidecar lists.
 struct SidecarStep {
-  std::string group;  ///< HDF5 group of its datasets: "/reference" or "/steps/NNNNNN"
-  double time = 0;    ///< load factor (static) or time [s]
+  Index row = -1;   ///< its row in the /steps datasets; -1: the reference state (/reference)
+  double time = 0;  ///< load factor (static) or time [s]
   std::vector<StepValue> values;
 };
 

@@ -30,6 +30,13 @@ void System::report(const Points& x, StepRecord& step) const {
   for (const auto& m : modules_) m->report(x, step);
 }
 
+std::vector<std::string> System::interface_names() const {
+  std::vector<std::string> out;
+  for (const auto& m : modules_)
+    for (std::string& name : m->interface_names()) out.push_back(std::move(name));
+  return out;
+}
+
 void System::prepare(const Points& x) {
   for (const auto& m : modules_) {
     PhaseTimers::Scope t(timers_, "collision detection: " + m->name());

@@ -46,6 +46,8 @@ class System {
   double max_step(const Points& x, const Points& dx) const;
   /// Lets every module add to the record of a converged step at x (after prepare(x)).
   void report(const Points& x, StepRecord& step) const;
+  /// The modules' interface_names(), in module order: the rows report() appends.
+  std::vector<std::string> interface_names() const;
   /// The Hessian filled by the last hessian() call.
   BlockSparseMatrix& matrix() { return hessian_; }
   /// Forces a rebuild of the Hessian pattern (a module's couplings changed).

@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
 # Crash safety of the results file: runs a small dynamic scene KILLS times, each killed with
-# SIGKILL at a random moment while `depthfem info` reads the live file, and checks that every step
-# printed as completed is in the file, bitwise equal to an uninterrupted run.
+# SIGKILL at a random moment while `depthfem info` reads the live file, and checks that every
+# results file left behind is readable, that every step printed as completed is in it (and in
+# its sidecars), and that every step in it is bitwise equal to an uninterrupted run's.
 # Usage: kill_test.sh PATH/TO/depthfem [KILLS]   (prints the figures; exit 1 on any failure)
 set -u
 exe=$1
 kills=${2:-50}
+here=$(cd "$(dirname "$0")" && pwd)
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
@@ -25,7 +27,7 @@ full_us=$(( ($(date +%s%N) - start) / 1000 ))
 
 readers=0 reader_failures=0
 for ((k = 0; k < kills; k++)); do
-  rm -f "$tmp"/run.h5 "$tmp"/.run.h5.* "$tmp"/run.xmf
+  rm -f "$tmp"/run.* "$tmp"/.run.h5.*
   "$exe" run "$tmp/scene.json" --out "$tmp/run.h5" --threads 1 > "$tmp/run$k.log" 2>&1 &
   pid=$!
   delay=$(( RANDOM * 32768 + RANDOM ))
@@ -37,16 +39,22 @@ for ((k = 0; k < kills; k++)); do
   fi
   kill -9 "$pid" 2> /dev/null
   wait "$pid" 2> /dev/null
-  cp "$tmp/run.h5" "$tmp/run$k.h5" 2> /dev/null || true
+  for f in "$tmp"/run.h5 "$tmp"/run.xmf "$tmp"/run.xdmf2; do
+    [ -f "$f" ] && cp "$f" "${f%.*}$k.${f##*.}"
+  done
   grep -o '^step *[0-9]*' "$tmp/run$k.log" | awk '{print $2}' > "$tmp/printed$k"
 done
 
-/usr/bin/python3 - "$tmp" "$kills" "$readers" "$reader_failures" <<'PY'
-import os, sys
-import h5py, numpy as np
-tmp, kills, readers, reader_failures = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4])
-ref = h5py.File(os.path.join(tmp, "ref.h5"), "r")
-corrupt = missing = unequal = no_file = printed_total = 0
+/usr/bin/python3 - "$tmp" "$kills" "$readers" "$reader_failures" "$here" <<'PY'
+import os, re, sys
+import xml.etree.ElementTree as ET
+import numpy as np
+tmp, kills, readers, reader_failures, here = sys.argv[1:6]
+kills, readers, reader_failures = int(kills), int(readers), int(reader_failures)
+sys.path.insert(0, here)
+from results import Results
+ref = Results(os.path.join(tmp, "ref.h5"))
+corrupt = missing = unequal = no_file = printed_total = in_file = sidecar_missing = 0
 for k in range(kills):
     printed = [int(s) for s in open(os.path.join(tmp, f"printed{k}")).read().split()]
     printed_total += len(printed)
@@ -56,27 +64,34 @@ for k in range(kills):
         missing += len(printed)  # a printed step without a file is lost
         continue
     try:
-        f = h5py.File(path, "r")
-        steps = f["steps"]
-        for name in steps:  # every step in the file must be readable
-            for dataset in steps[name].values():
-                dataset[()]
+        with Results(path) as r:
+            steps = {int(i): row for row, i in enumerate(r.index)}
+            fields = {name: r.series(name) for name in ("x", "v", "load", "energy")}
+            r.status, r.timing()
     except Exception as e:
         corrupt += 1
         print(f"run {k}: unreadable: {e}")
         continue
-    for s in printed:
-        name = f"{s:06d}"
-        if name not in steps:
-            missing += 1
-            continue
-        for field in ("x", "v"):
-            if not np.array_equal(steps[name][field][()], ref["steps"][name][field][()]):
-                unequal += 1
-print(f"kills {kills}, steps printed {printed_total}, runs killed before the file existed "
-      f"{no_file}, corrupt files {corrupt}, printed-but-missing steps {missing}, "
-      f"steps differing from the uninterrupted run {unequal}, live reads {readers} "
-      f"(failed {reader_failures})")
-# Live reads are reported, not yet a failure: see the README (reliability).
-sys.exit(1 if corrupt or missing or unequal else 0)
+    in_file += len(steps)
+    missing += sum(1 for s in printed if s not in steps)
+    for index, row in steps.items():  # every step in the file, printed or not
+        if any(not np.array_equal(values[row], ref.series(name)[ref.row_of(index)])
+               for name, values in fields.items()):
+            unequal += 1
+    for sidecar in (f"run{k}.xmf", f"run{k}.xdmf2"):
+        try:
+            text = open(os.path.join(tmp, sidecar)).read()
+            ET.fromstring(text)
+            listed = len(re.findall(r'<Grid Name="step_', text))
+        except (OSError, ET.ParseError) as e:
+            listed = -1
+            print(f"run {k}: {sidecar}: {e}")
+        if listed < len(printed):
+            sidecar_missing += 1
+print(f"kills {kills}, steps printed {printed_total}, steps in the files {in_file}, "
+      f"runs killed before the file existed {no_file}, corrupt files {corrupt}, "
+      f"printed-but-missing steps {missing}, steps differing from the uninterrupted run "
+      f"{unequal}, sidecars missing a printed step {sidecar_missing}, "
+      f"live reads {readers} (failed {reader_failures})")
+sys.exit(1 if corrupt or missing or unequal or sidecar_missing or reader_failures else 0)
 PY

@@ -21,14 +21,13 @@ algorithm (triangles sorted far to near, Lambert shading). Errors print one line
 
 import argparse
 import csv
-import json
 import os
 import sys
 
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from render import ToolError, open_results, run_main, save_figure, step_names  # noqa: E402
+from render import ToolError, open_results, run_main, save_figure  # noqa: E402
 
 import matplotlib  # noqa: E402
 
@@ -49,8 +48,8 @@ class Run:
     """What the figures need from a results file."""
 
     def __init__(self, path):
-        with open_results(path) as f:
-            self.names = step_names(f, path)
+        with open_results(path) as results:
+            f = results.f
             self.X = f["mesh/X"][:]
             self.tets = f["mesh/tets"][:]
             self.tris = f["mesh/tris"][:]
@@ -61,9 +60,9 @@ class Run:
             if "node_sets" not in f["mesh"]:
                 raise ToolError(f"{path}: has no node sets (not a knee run)")
             self.sets = {k: f["mesh/node_sets"][k][:] for k in f["mesh/node_sets"]}
-            self.loads = np.array([f["steps"][n].attrs["load"] for n in self.names])
-            self.x = [f[f"steps/{n}/x"][:] for n in self.names]
-            scene = json.loads(f["run"].attrs["scene"])
+            self.loads = results.series("load")
+            self.x = list(results.series("x"))
+            scene = results.scene()
         for body in ("femur", "tibia", "leg"):
             if body not in self.bodies:
                 raise ToolError(f"{path}: no body '{body}' (bodies: {', '.join(self.bodies)})")
@@ -287,9 +286,9 @@ def main(argv):
     parser.add_argument("--gif", action="store_true", help="also write the animation")
     args = parser.parse_args(argv)
     run = Run(args.result)
-    step = len(run.names) - 1 if args.step is None else args.step
-    if not 0 <= step < len(run.names):
-        raise ToolError(f"{args.result}: no step {step} (steps 0 to {len(run.names) - 1})")
+    step = len(run.x) - 1 if args.step is None else args.step
+    if not 0 <= step < len(run.x):
+        raise ToolError(f"{args.result}: no step {step} (steps 0 to {len(run.x) - 1})")
     os.makedirs(args.out, exist_ok=True)
     figure_side(run, step, args.out)
     figure_cutaway(run, step, args.out)

@@ -1,10 +1,11 @@
 """Open depthfem results in ParaView, headless, and check what ParaView shows against the HDF5 file.
 
-    xvfb-run -a pvbatch apps/tools/paraview_check.py RESULT.xmf [RESULT.xmf ...]
+    xvfb-run -a pvbatch apps/tools/paraview_check.py RESULT.h5 [RESULT.h5 ...]
 
 Needs Debian's paraview, python3-paraview and xvfb (not needed by the build or the tests). For
-each sidecar and each of ParaView's XDMF readers (XDMF Reader; Xdmf3 Reader T; Xdmf3 Reader S,
-which shows the blocks as unnamed pieces) it checks that:
+each results file and each of ParaView's XDMF readers, opening the sidecar written for it
+(XDMF Reader: RESULT.xdmf2; Xdmf3 Reader T and Xdmf3 Reader S, which shows the blocks as
+unnamed pieces: RESULT.xmf), it checks that:
   * the time steps are 0 (the reference state) and then every step's load, exactly (the settling
     steps of a static run, all at load 1, at 2, 3, ...);
   * the blocks are the bodies, named "body (material)", a body with several element regions
@@ -22,12 +23,14 @@ import os
 import re
 import sys
 
-import h5py
 import numpy as np
 from paraview import servermanager
 from paraview.simple import Delete, Xdmf3ReaderS, Xdmf3ReaderT, XDMFReader
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonDataModel import vtkCompositeDataSet
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from results import Results as ResultsReader  # noqa: E402
 
 READERS = {
     "XDMF Reader": lambda path: XDMFReader(FileNames=[path]),
@@ -35,6 +38,8 @@ READERS = {
     "Xdmf3 Reader S": lambda path: Xdmf3ReaderS(FileName=path),
 }
 NAMED = {"XDMF Reader": True, "Xdmf3 Reader T": True, "Xdmf3 Reader S": False}
+# The sidecar each reader opens: the readers take different notations for a part of a dataset.
+SIDECAR = {"XDMF Reader": ".xdmf2", "Xdmf3 Reader T": ".xmf", "Xdmf3 Reader S": ".xmf"}
 # Per-step datasets by the array name ParaView shows.
 NODE_FIELDS = {"displacement": "displacement", "velocity": "v"}
 TET_FIELDS = ("stress", "von_mises", "strain", "volume_ratio")
@@ -62,8 +67,9 @@ def expect_equal(shown, stored, what):
 class Results:
     """What the HDF5 file says the sidecar must show."""
 
-    def __init__(self, h5):
-        self.f = h5
+    def __init__(self, results):
+        self.results = results
+        self.f = h5 = results.f
         mesh = h5["mesh"]
         self.X = mesh["X"][:]
         self.tets = mesh["tets"][:]
@@ -89,48 +95,43 @@ class Results:
                 self.blocks.append((f"{name}/{region_names[r]} ({region_materials[r]})", nodes,
                                     range(here[0], here[-1] + 1)))
         self.depth = mesh["depth"][:] if "depth" in mesh else None
-        self.steps = sorted(h5["steps"])
         # The sidecar's times: the loads, then 2, 3, ... for the settling steps of a static run.
         self.times = [0.0]
-        for s in self.steps:
-            attrs = h5["steps"][s].attrs
+        for load, settling in zip(results.series("load"), results.series("settling")):
             settled = sum(1 for t in self.times if t > 1)
-            self.times.append(2.0 + settled if attrs["settling"] else float(attrs["load"]))
-        first = h5["steps"][self.steps[0]] if self.steps else h5["reference"]
-        self.node_fields = [n for n, d in NODE_FIELDS.items() if d in first]
-        self.tet_fields = [n for n in TET_FIELDS if n in first]
-        self.triangle_fields = [n for n in TRIANGLE_FIELDS if n in first]
+            self.times.append(2.0 + settled if settling else float(load))
+        self.node_fields = [n for n, d in NODE_FIELDS.items() if results.has(d)]
+        self.tet_fields = [n for n in TET_FIELDS if results.has(n)]
+        self.triangle_fields = [n for n in TRIANGLE_FIELDS if results.has(n)]
         self.constraints = list(h5["run/constraint_names"].asstr()[:])
-        self.contacts = (list(h5["run/contact_names"].asstr()[:])
-                         if "contact_names" in h5["run"] else [])
+        self.contacts = list(h5["run/contact_names"].asstr()[:])
 
     def group(self, state):
-        """The HDF5 group of state `state` (0: the reference state)."""
-        return self.f["reference"] if state == 0 else self.f["steps"][self.steps[state - 1]]
+        """The datasets of state `state` (0: the reference state)."""
+        return self.results.reference() if state == 0 else self.results.step(state - 1)
 
     def node_field(self, g, field):
         """A node field of state group g; the displacement as x - X, from the positions."""
-        return g["x"][:] - self.X if field == "displacement" else g[NODE_FIELDS[field]][:]
+        return g["x"][()] - self.X if field == "displacement" else g[NODE_FIELDS[field]][()]
 
     def field_data(self, state):
         """The boundary's field data at a step: name -> values."""
         if state == 0:
             return {}
         g = self.group(state)
-        values = {"step": [g.attrs["index"]], "load": [g.attrs["load"]],
-                  "settling": [g.attrs["settling"]],
-                  "newton_iterations": [g.attrs["newton_iterations"]],
-                  "linear_iterations": [g.attrs["linear_iterations"]],
+        values = {"step": [g["index"]], "load": [g["load"]], "settling": [g["settling"]],
+                  "newton_iterations": [g["newton_iterations"]],
+                  "linear_iterations": [g["linear_iterations"]],
                   "residual": [g["residuals"][-1] if g["residuals"].size else 0.0],
-                  "energy": [g.attrs["energy"]]}
-        if "kinetic_energy" in g.attrs:
-            values["kinetic_energy"] = [g.attrs["kinetic_energy"]]
+                  "energy": [g["energy"]]}
+        if "kinetic_energy" in g:
+            values["kinetic_energy"] = [g["kinetic_energy"]]
         for k, name in enumerate(self.constraints):
             values[f"reaction {name}"] = g["reactions"][k]
         if self.contacts:
-            values["contact_area"] = [g.attrs["contact_area"]]
-        if "penetration" in g.attrs:
-            values["penetration"] = [g.attrs["penetration"]]
+            values["contact_area"] = [g["contact_area"]]
+        if "penetration" in g and not np.isnan(g["penetration"]):
+            values["penetration"] = [g["penetration"]]
         for k, name in enumerate(self.contacts):
             values[f"contact_force {name}"] = g["contact_forces"][k]
             values[f"contact_force_magnitude {name}"] = [g["contact_force_magnitudes"][k]]
@@ -167,7 +168,7 @@ def cell_points(grid, corners):
 def check_state(results, data, state, named):
     """Checks every block of the data set ParaView shows at state `state` against the file."""
     g = results.group(state)
-    x = g["x"][:]
+    x = g["x"][()]
     blocks = leaves(data)
     expect(len(blocks) == len(results.blocks) + 1,
            f"{len(blocks)} blocks, expected {len(results.blocks)} and the boundary")
@@ -217,7 +218,7 @@ def check_state(results, data, state, named):
            f"{where}: cell arrays {sorted(cell)}")
     expect_equal(cell["body"], results.f["mesh/tri_body"][:], f"{where}: body")
     for field in results.triangle_fields:
-        expect_equal(cell[field], g[field][:], f"{where}: {field}")
+        expect_equal(cell[field], g[field][()], f"{where}: {field}")
     shown = arrays(boundary.GetFieldData())
     stored = results.field_data(state)
     expect(sorted(shown) == sorted(stored),
@@ -255,7 +256,7 @@ def summary(results, name):
     """Two lines describing what the sidecar shows."""
     blocks = ", ".join(f"{b} {len(n)}/{len(t)}" for b, n, t in results.blocks)
     fields = results.node_fields + (["depth"] if results.depth is not None else [])
-    static = results.f["run"].attrs["analysis"] == "static"
+    static = results.results.analysis == "static"
     settled = sum(1 for t in results.times if t > 1) if static else 0
     span = ("load 0 ... 1" + (f", {settled} settling steps" if settled else "") if static
             else f"t = 0 ... {results.times[-1]:g} s")
@@ -272,18 +273,20 @@ def main(paths):
         return 2
     failed = False
     for path in paths:
-        xmf = os.path.abspath(path)  # the Xdmf3 readers resolve the HDF5 file against its folder
-        h5_path = os.path.splitext(xmf)[0] + ".h5"
-        if not os.path.isfile(xmf) or not os.path.isfile(h5_path):
-            print(f"{path}: no sidecar and results file pair ({h5_path})", file=sys.stderr)
+        h5_path = os.path.abspath(path)  # the Xdmf3 readers resolve the HDF5 file against its folder
+        base = os.path.splitext(h5_path)[0]
+        sidecars = {reader: base + SIDECAR[reader] for reader in READERS}
+        missing = [p for p in [h5_path, *sidecars.values()] if not os.path.isfile(p)]
+        if missing:
+            print(f"{path}: no {', '.join(missing)}", file=sys.stderr)
             failed = True
             continue
-        with h5py.File(h5_path, "r") as h5:
+        with ResultsReader(h5_path) as h5:
             results = Results(h5)
             print(summary(results, os.path.basename(path)))
             verdicts = []
             for reader_name in READERS:
-                problem = check_reader(results, reader_name, xmf)
+                problem = check_reader(results, reader_name, sidecars[reader_name])
                 failed |= bool(problem)
                 verdicts.append(f"{reader_name}: {'FAILED: ' + problem if problem else 'ok'}")
             print("  " + "; ".join(verdicts))

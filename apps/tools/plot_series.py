@@ -17,20 +17,15 @@ matplotlib.use("Agg")  # no display needed
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from render import (  # noqa: E402
-    is_dynamic, open_results, run_main, save_figure, scene_name, step_names)
+from render import open_results, run_main, save_figure, scene_name  # noqa: E402
 
 
 def read_series(path):
     """Per-step arrays: load, Newton iterations, final residual (nan if none), energy; and the
     scene name and whether the run is dynamic."""
-    with open_results(path) as f:
-        steps = [f["steps"][name] for name in step_names(f, path)]
-        load = np.array([s.attrs["load"] for s in steps])
-        newton = np.array([s.attrs["newton_iterations"] for s in steps])
-        residual = np.array([s["residuals"][-1] if s["residuals"].size else np.nan for s in steps])
-        energy = np.array([s.attrs["energy"] for s in steps])
-        return load, newton, residual, energy, scene_name(f), is_dynamic(f)
+    with open_results(path) as r:
+        return (r.series("load"), r.series("newton_iterations"), r.last_residuals(),
+                r.series("energy"), scene_name(r), r.analysis in ("dynamic", "quasistatic"))
 
 
 def plot_series(path, out):

@@ -13,11 +13,9 @@ The three axes share one scale. Errors print one line to stderr and exit with st
 """
 
 import argparse
-import json
 import os
 import sys
 
-import h5py
 import matplotlib
 
 matplotlib.use("Agg")  # no display needed
@@ -26,48 +24,41 @@ import numpy as np  # noqa: E402
 from matplotlib.ticker import FormatStrFormatter, MaxNLocator  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from results import Results, ResultsError  # noqa: E402
+
 
 class ToolError(Exception):
     """A problem with the input, reported as one line."""
 
 
 def open_results(path):
-    """Opens a depthfem results file read-only; ToolError if missing, not HDF5 or foreign."""
+    """Opens a depthfem results file (results.Results) that has at least one completed step;
+    ToolError if it is missing, not HDF5, foreign or without steps."""
     if not os.path.isfile(path):
         raise ToolError(f"{path}: no such results file")
     try:
-        f = h5py.File(path, "r")
-    except OSError:
-        raise ToolError(f"{path}: not an HDF5 file") from None
-    if not all(group in f for group in ("mesh", "run", "steps")):
-        raise ToolError(f"{path}: not a depthfem results file (no /mesh, /run or /steps)")
-    return f
-
-
-def step_names(f, path):
-    """Names of the step groups in step order ("000001", ...); ToolError if there are none."""
-    names = sorted(f["steps"])
-    if not names:
+        results = Results(path)
+    except ResultsError as error:
+        raise ToolError(str(error)) from None
+    if not results.num_steps:
+        results.close()
         raise ToolError(f"{path}: has no steps")
-    return names
+    return results
 
 
-def scene_name(f):
+def scene_name(results):
     """The "name" of the scene JSON stored in /run, or None."""
     try:
-        return json.loads(f["run"].attrs["scene"]).get("name")
+        return results.scene().get("name")
     except (KeyError, ValueError, AttributeError):
         return None
 
 
-def is_dynamic(f):
-    """Whether the run is time-dependent, so that a step's "load" is its time [s]."""
-    return f["run"].attrs.get("analysis") in ("dynamic", "quasistatic")
-
-
-def load_label(f, load):
+def load_label(results, load):
     """'t = 0.5 s' for a time-dependent run, 'load 0.5' otherwise."""
-    return f"t = {load:g} s" if is_dynamic(f) else f"load {load:g}"
+    dynamic = results.analysis in ("dynamic", "quasistatic")
+    return f"t = {load:g} s" if dynamic else f"load {load:g}"
 
 
 def run_main(main, argv):
@@ -92,7 +83,7 @@ TENSOR_COMPONENTS = ("xx", "yy", "zz", "xy", "yz", "xz")
 
 
 def available_fields(f, step):
-    """The fields --color can show at step group `step`, in UNITS order."""
+    """The fields --color can show at step `step` (results.Step), in UNITS order."""
     def present(name):
         if name in ("body", "displacement"):  # displacement: x - X where not written
             return True
@@ -103,12 +94,12 @@ def available_fields(f, step):
 
 
 def field_data(f, name, step):
-    """The array of field `name` at step group `step`."""
+    """The array of field `name` at step `step` (results.Step)."""
     if name == "depth":
         return f["mesh/depth"][:]
     if name == "displacement" and "displacement" not in step:
-        return step["x"][:] - f["mesh/X"][:]
-    return step[DATASET.get(name, name)][:]
+        return step["x"] - f["mesh/X"][:]
+    return step[DATASET.get(name, name)]
 
 
 def field_values(f, name, component, step, x, tris):
@@ -186,19 +177,20 @@ def parse_color(text):
 def render(path, out, step=None, view=(25.0, -60.0), color="displacement", reference=False):
     """Draws step `step` (default: the last) of results file `path` and writes the PNG `out`."""
     name_of_field, component = parse_color(color)
-    with open_results(path) as f:
-        group = chosen_step(f, path, step)
-        name = group.name.rsplit("/", 1)[1]
+    with open_results(path) as results:
+        group = chosen_step(results, path, step)
+        f = results.f
+        index = group["index"]
         tris = f["mesh/tris"][:]
         X = f["mesh/X"][:]
-        x = group["x"][:]
+        x = group["x"]
         try:
             values, label = field_values(f, name_of_field, component, group, x, tris)
         except ToolError as error:
-            raise ToolError(f"{path}: step {int(name)}: {error}") from None
+            raise ToolError(f"{path}: step {index}: {error}") from None
         body_names = list(f["mesh/body_names"].asstr()[:])
-        where = f"step {int(name)}, {load_label(f, group.attrs['load'])}"
-        title = f"{scene_name(f)}: {where}" if scene_name(f) else where
+        where = f"step {index}, {load_label(results, group['load'])}"
+        title = f"{scene_name(results)}: {where}" if scene_name(results) else where
 
     fig = plt.figure(figsize=(8, 7))
     ax = fig.add_subplot(projection="3d")
@@ -240,19 +232,19 @@ def save_figure(fig, out, extra_artists=(), dpi=150):
     plt.close(fig)
 
 
-def chosen_step(f, path, step):
-    """The group of step `step` (default: the last); ToolError if there is none."""
-    names = step_names(f, path)
-    name = names[-1] if step is None else f"{step:06d}"
-    if name not in names:
-        raise ToolError(f"{path}: no step {step} (steps {int(names[0])} to {int(names[-1])})")
-    return f["steps"][name]
+def chosen_step(results, path, step):
+    """The datasets of step `step` (its index; default: the last); ToolError if there is none."""
+    try:
+        return results.step(-1 if step is None else results.row_of(step))
+    except ResultsError as error:
+        raise ToolError(str(error)) from None
 
 
 def list_fields(path, step=None):
     """Prints the fields --color can show at a step (default: the last), with their shapes."""
-    with open_results(path) as f:
-        group = chosen_step(f, path, step)
+    with open_results(path) as results:
+        f = results.f
+        group = chosen_step(results, path, step)
         for name in available_fields(f, group):
             if name == "body":
                 print("body (names)")

@@ -5,6 +5,7 @@
 // scene's physics choose.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -190,17 +191,24 @@ TEST(RunScene, EachRegionIsABlockWithItsOwnTetsAndStresses) {
   const H5File file = H5File::open(out.path);
   const double mu[2] = {1e4, 1e5}, lambda[2] = {4e4, 4e5};
   const char* names[2] = {"cube/soft (neo_hookean)", "cube/stiff (neo_hookean)"};
+  const Eigen::MatrixXd x = read_step_dataset(out.path, last, "x");
+  const Eigen::MatrixXd all_stress = read_step_dataset(out.path, last, "stress");
+  const Eigen::MatrixXd all_volume_ratio = read_step_dataset(out.path, last, "volume_ratio");
+  const std::vector<double> tet_region = file.read_doubles("/mesh/tet_region");
+  ASSERT_EQ(x.rows(), cube.X.rows());
   for (int k = 0; k < 2; ++k) {
     SCOPED_TRACE(names[k]);
     const std::string block = "blocks/" + std::to_string(k);
     EXPECT_EQ(file.string_attribute("/mesh/" + block, "name"), names[k]);
     const std::vector<double> local = file.read_doubles("/mesh/" + block + "/tets");
-    const Eigen::MatrixXd x = read_step_dataset(out.path, last, block + "/x");
-    const Eigen::MatrixXd stress = read_step_dataset(out.path, last, block + "/stress");
-    const Eigen::MatrixXd volume_ratio = read_step_dataset(out.path, last, block + "/volume_ratio");
+    // The region's rows of the tet fields: contiguous, region after region.
+    const Index first =
+        Index(std::find(tet_region.begin(), tet_region.end(), k) - tet_region.begin());
+    const Index count = Index(std::count(tet_region.begin(), tet_region.end(), k));
+    ASSERT_EQ(count, Index(region_tets[k].size()));
+    const Eigen::MatrixXd stress = all_stress.middleRows(first, count);
+    const VectorX volume_ratio = all_volume_ratio.col(0).segment(first, count);
     ASSERT_EQ(local.size(), 4 * region_tets[k].size());
-    ASSERT_EQ(x.rows(), cube.X.rows());
-    ASSERT_EQ(stress.rows(), Index(region_tets[k].size()));
     const double scale = stress.cwiseAbs().maxCoeff();
     EXPECT_GT(scale, 10.0) << "the region must be deformed";
     const int row[6] = {0, 1, 2, 0, 1, 0}, col[6] = {0, 1, 2, 1, 2, 2};  // xx yy zz xy yz xz

@@ -1,11 +1,16 @@
 // Results files: exact round trip of mesh, run metadata, the reference state, steps, fields and
-// timing through the HDF5 C API; per-body and per-region views; completed steps surviving a killed
-// writer; the XDMF sidecar's structure (every dataset it names exists with the dimensions it
-// states) and its step-by-step growth; errors naming the file.
+// timing through the HDF5 C API; per-body and per-region blocks; completed steps surviving a
+// killed writer and a full disk; a second writer refused; the XDMF sidecars' structure (every
+// dataset they name exists with the dimensions they state, and the parts they select hold the
+// expected values) and their step-by-step growth; errors naming the file.
 #include <gtest/gtest.h>
 #include <hdf5.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
+
+#include <csignal>
+#include <numeric>
 
 #include <algorithm>
 #include <cmath>
@@ -27,16 +32,18 @@ namespace {
 namespace fs = std::filesystem;
 
 // Reads through the HDF5 C API directly, so that the writer is not checked by its own reader.
-// Failures show as empty or zero values, which the expectations then reject. Opens without file
-// locks like depthfem does: HDF5 refuses to open a file twice with different locking settings.
+// Failures show as empty or zero values, which the expectations then reject. Opens as a SWMR
+// reader (a killed writer's file needs it) without file locks like depthfem does: HDF5 refuses
+// to open a file twice with different locking settings.
 class RawFile {
  public:
   explicit RawFile(const fs::path& path) {
     const hid_t access = H5Pcreate(H5P_FILE_ACCESS);
     H5Pset_file_locking(access, false, true);
-    id_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, access);
+    id_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, access);
     H5Pclose(access);
   }
+  bool is_open() const { return id_ >= 0; }
   ~RawFile() {
     if (id_ >= 0) H5Fclose(id_);
   }
@@ -70,8 +77,56 @@ class RawFile {
     values<double>(name, H5T_NATIVE_DOUBLE, dims);
     return dims;
   }
-  bool has_attribute(const std::string& object, const char* name) const {
-    return H5Aexists_by_name(id_, object.c_str(), name, H5P_DEFAULT) > 0;
+  // Row `row` of a /steps dataset (all rows at once is values()).
+  std::vector<double> row(const std::string& name, hsize_t row) const {
+    std::vector<hsize_t> dims = this->dims(name), start(dims.size(), 0);
+    start[0] = row;
+    dims[0] = 1;
+    return slab(name, start, dims);
+  }
+  // The hyperslab from `start` of `count` values in each dimension, as doubles, row-major.
+  std::vector<double> slab(const std::string& name, const std::vector<hsize_t>& start,
+                           const std::vector<hsize_t>& count) const {
+    const hid_t set = H5Dopen2(id_, name.c_str(), H5P_DEFAULT), space = H5Dget_space(set);
+    const hid_t memory = H5Screate_simple(int(count.size()), count.data(), nullptr);
+    std::vector<double> out(std::max<hssize_t>(H5Sget_simple_extent_npoints(memory), 0));
+    if (H5Sselect_hyperslab(space, H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr) <
+            0 ||
+        H5Dread(set, H5T_NATIVE_DOUBLE, memory, space, H5P_DEFAULT, out.data()) < 0)
+      out.clear();
+    H5Sclose(memory);
+    H5Sclose(space);
+    H5Dclose(set);
+    return out;
+  }
+  // A scalar dataset of one fixed-length string (NUL padded).
+  std::string text(const std::string& name) const {
+    const hid_t set = H5Dopen2(id_, name.c_str(), H5P_DEFAULT), type = H5Dget_type(set);
+    std::string out(std::max<size_t>(H5Tget_size(type), 0), '\0');
+    if (out.empty() || H5Tis_variable_str(type) != 0 ||
+        H5Dread(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()) < 0)
+      out = "<not a fixed-length string>";
+    H5Tclose(type);
+    H5Dclose(set);
+    return out.substr(0, out.find('\0'));
+  }
+  // The rows of a dataset of fixed-length strings.
+  std::vector<std::string> texts(const std::string& name) const {
+    const hid_t set = H5Dopen2(id_, name.c_str(), H5P_DEFAULT), type = H5Dget_type(set);
+    const hid_t space = H5Dget_space(set);
+    const size_t size = H5Tget_size(type);
+    const hssize_t n = std::max<hssize_t>(H5Sget_simple_extent_npoints(space), 0);
+    std::string buffer(size * size_t(n), '\0');
+    std::vector<std::string> out;
+    if (n == 0 || H5Dread(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, buffer.data()) >= 0)
+      for (hssize_t k = 0; k < n; ++k) {
+        const std::string one = buffer.substr(size * size_t(k), size);
+        out.push_back(one.substr(0, one.find('\0')));
+      }
+    H5Sclose(space);
+    H5Tclose(type);
+    H5Dclose(set);
+    return out;
   }
 
   // All values, row-major, read as `type`; `dims` receives the dataset's dimensions.
@@ -133,15 +188,9 @@ struct Fixture {
   Mesh mesh = single_body_mesh(
       box_mesh({Vec3(0.1, -0.2, 0.3), Vec3(0.4, 0.3, 0.7), Eigen::Vector3i(1, 1, 2)}), "block");
   VectorX depth = (0.7 - mesh.X.col(2).array()).matrix();
-  RunInfo info{R"({"name": "squeeze", "steps": 3})",
-               "0.1.0",
-               "static",
-               2,
-               {"bottom", "top"},
-               {"mooney_rivlin"},
-               {},
-               {},
-               {}};
+  RunInfo info{
+      R"({"name": "squeeze", "steps": 3})", "0.1.0",           "static", 2,  {"bottom", "top"},
+      {"block/ball", "obstacle floor"},     {"mooney_rivlin"}, {},       {}, {}};
 };
 
 // Two bodies: "left" (12 tets) and "right" (a 2 x 1 x 1-cell box, 12 tets, 18 nodes).
@@ -193,12 +242,13 @@ ElementFields element_values(Index tets, int k) {
   return e;
 }
 
-// Writes a results file of `mesh` without constraints and with one step: positions(mesh, 1) and
-// element_values(#tets, 1), which it returns.
+// Writes a results file of `mesh` without constraints or contact and with one step:
+// positions(mesh, 1) and element_values(#tets, 1), which it returns.
 ElementFields write_one_step(const fs::path& path, const Mesh& mesh, const RunInfo& info) {
   const ElementFields elements = element_values(mesh.num_tets(), 1);
   StepRecord step = step_record(1);
   step.reactions.resize(0, 3);
+  step.contact.clear();
   ResultsFile file(path, mesh, VectorX(), info);
   file.append_step(step, positions(mesh, 1), nullptr, &elements);
   return elements;
@@ -220,6 +270,107 @@ std::string read_text(const fs::path& path) {
   return text.str();
 }
 
+// A DataItem of a sidecar that reads an HDF5 dataset: the whole dataset, or the part that a
+// selection names (Xdmf3: "FILE:DATASET|start:stride:count:dims"; XDMF 2: a HyperSlab item).
+struct SidecarItem {
+  std::string dataset;
+  std::vector<hsize_t> shape;  // the item's Dimensions: the shape the reader gets
+  std::vector<hsize_t> dims;   // the dataset's dimensions as the sidecar states them
+  std::vector<hsize_t> start, count;
+  bool selection = false;
+};
+
+std::vector<hsize_t> numbers(const std::string& text) {
+  std::istringstream in(text);
+  std::vector<hsize_t> out;
+  for (hsize_t v; in >> v;) out.push_back(v);
+  return out;
+}
+
+// Every item of `xmf` that reads from `h5_name`, in order; `unparsed` counts those that name the
+// file in another form (which the expectations reject).
+std::vector<SidecarItem> sidecar_items(const std::string& xmf, const std::string& h5_name,
+                                       size_t& unparsed) {
+  const std::string file = std::regex_replace(h5_name, std::regex(R"(\.)"), R"(\.)");
+  const std::string hdf =
+      R"re(NumberType="(?:Float|Int)" Precision="(?:4|8)" Format="HDF">)re" + file + ":";
+  const std::regex plain(
+      R"re(<DataItem Dimensions="([0-9 ]+)" )re" + hdf +
+      R"re(([^<|]+)(?:\|([0-9 ]+):([0-9 ]+):([0-9 ]+):([0-9 ]+))?</DataItem>)re");
+  const std::regex slab(
+      R"re(<DataItem ItemType="HyperSlab" Dimensions="([0-9 ]+)" Type="HyperSlab"><DataItem Dimensions="3 ([0-9]+)" Format="XML">([0-9 ]+)</DataItem><DataItem Dimensions="([0-9 ]+)" )re" +
+      hdf + R"re(([^<]+)</DataItem></DataItem>)re");
+  std::vector<SidecarItem> out;
+  size_t named = 0;
+  for (size_t at = xmf.find(h5_name + ":"); at != std::string::npos;
+       at = xmf.find(h5_name + ":", at + 1))
+    ++named;
+  for (std::sregex_iterator m(xmf.begin(), xmf.end(), slab), end; m != end; ++m) {
+    const std::vector<hsize_t> selection = numbers((*m)[3]);
+    const size_t rank = std::stoul((*m)[2]);
+    SidecarItem item{(*m)[5], numbers((*m)[1]), numbers((*m)[4]), {}, {}, true};
+    if (selection.size() == 3 * rank) {
+      item.start.assign(selection.begin(), selection.begin() + long(rank));
+      item.count.assign(selection.begin() + 2 * long(rank), selection.end());
+      if (!std::all_of(selection.begin() + long(rank), selection.begin() + 2 * long(rank),
+                       [](hsize_t s) { return s == 1; }))
+        item.count.clear();  // a stride other than 1: rejected below
+    }
+    out.push_back(item);
+  }
+  const std::string without_slabs = std::regex_replace(xmf, slab, "");
+  for (std::sregex_iterator m(without_slabs.begin(), without_slabs.end(), plain), end; m != end;
+       ++m) {
+    SidecarItem item{(*m)[2], numbers((*m)[1]), {}, {}, {}, (*m)[3].matched};
+    if (item.selection) {
+      item.start = numbers((*m)[3]);
+      if (numbers((*m)[4]) != std::vector<hsize_t>(item.start.size(), 1)) continue;
+      item.count = numbers((*m)[5]);
+      item.dims = numbers((*m)[6]);
+    }
+    out.push_back(item);
+  }
+  unparsed = named - out.size();
+  return out;
+}
+
+// Checks every item against the results file: its dataset exists; a whole dataset has the
+// stated dimensions; a selection states the dataset's dimensions (for the growing /steps
+// datasets: as many rows as the selection needs, at most as many as the file has), lies inside
+// them, and has as many values as the item's shape.
+void expect_items_in_file(const std::vector<SidecarItem>& items, const RawFile& raw) {
+  for (const SidecarItem& item : items) {
+    SCOPED_TRACE(item.dataset);
+    ASSERT_TRUE(raw.has(item.dataset));
+    const std::vector<hsize_t> actual = raw.dims(item.dataset);
+    if (!item.selection) {
+      EXPECT_EQ(item.shape, actual);
+      continue;
+    }
+    ASSERT_EQ(item.dims.size(), actual.size());
+    ASSERT_EQ(item.start.size(), actual.size());
+    ASSERT_EQ(item.count.size(), actual.size());
+    const bool series = item.dataset.rfind("/steps/", 0) == 0;
+    for (size_t d = 0; d < actual.size(); ++d) {
+      if (series && d == 0)
+        EXPECT_LE(item.dims[0], actual[0]);
+      else
+        EXPECT_EQ(item.dims[d], actual[d]) << "dimension " << d;
+      EXPECT_LE(item.start[d] + item.count[d], item.dims[d]) << "dimension " << d;
+    }
+    const auto product = [](const std::vector<hsize_t>& v) {
+      return std::accumulate(v.begin(), v.end(), hsize_t(1), std::multiplies<>());
+    };
+    EXPECT_EQ(product(item.count), product(item.shape));
+  }
+}
+
+// What the reader of `item` gets from the file.
+std::vector<double> read_item(const RawFile& raw, const SidecarItem& item) {
+  return item.selection ? raw.slab(item.dataset, item.start, item.count)
+                        : raw.doubles(item.dataset);
+}
+
 class ResultsFileTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -229,7 +380,9 @@ class ResultsFileTest : public ::testing::Test {
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
-  void TearDown() override { fs::remove_all(dir_); }
+  void TearDown() override {
+    if (!getenv("KEEP")) fs::remove_all(dir_);
+  }
 
   fs::path dir_;
   Fixture f_;
@@ -241,13 +394,14 @@ TEST_F(ResultsFileTest, RoundTripOfMeshRunStepsAndTiming) {
   for (int k = 1; k <= 3; ++k) x.push_back(positions(f_.mesh, k));
   {
     ResultsFile file(path, f_.mesh, f_.depth, f_.info);
+    EXPECT_FALSE(fs::exists(dir_ / ".run.h5.partial")) << "built under this name, then renamed";
     for (int k = 1; k <= 3; ++k) {
       file.append_step(step_record(k), x[k - 1], nullptr);
-      if (k == 1) {  // readable while the writer is open
-        const ResultsSummary during = read_results_summary(path);
-        EXPECT_EQ(during.status, "running");
-        EXPECT_EQ(during.num_steps, 1);
-      }
+      // Readable while the writer is open, with every step written so far.
+      const ResultsSummary during = read_results_summary(path);
+      EXPECT_EQ(during.status, "running");
+      EXPECT_EQ(during.num_steps, k);
+      EXPECT_EQ(read_step_positions(path, k), x[k - 1]);
     }
     file.write_timing({{"solve", 9.0}, {"assembly", 1.0}});
     file.write_timing({{"solve", 2.5}, {"assembly", 1.5}, {"contact", 0.25}});  // replaces
@@ -283,10 +437,12 @@ TEST_F(ResultsFileTest, RoundTripOfMeshRunStepsAndTiming) {
   EXPECT_EQ(raw.string_attribute("/run", "scene"), f_.info.scene_json);
   EXPECT_EQ(raw.string_attribute("/run", "version"), "0.1.0");
   EXPECT_EQ(raw.string_attribute("/run", "analysis"), "static");
-  EXPECT_EQ(raw.string_attribute("/run", "status"), "completed");
-  EXPECT_EQ(raw.string_attribute("/run", "message"), "");
+  EXPECT_EQ(raw.text("/run/status"), "completed");
+  EXPECT_EQ(raw.text("/run/message"), "");
   EXPECT_EQ(raw.attribute<int>("/run", "threads", H5T_NATIVE_INT), 2);
   EXPECT_EQ(raw.strings("/run/constraint_names"), f_.info.constraint_names);
+  EXPECT_EQ(raw.strings("/run/contact_names"),
+            std::vector<std::string>({"block/ball", "obstacle floor"}));
 
   // The reference state: positions X (a view of /mesh/X), no displacement (zeros, no storage).
   EXPECT_TRUE(raw.is_view("/reference/x"));
@@ -295,36 +451,44 @@ TEST_F(ResultsFileTest, RoundTripOfMeshRunStepsAndTiming) {
   EXPECT_EQ(raw.storage("/reference/displacement"), 0u);
   EXPECT_FALSE(raw.has("/reference/v"));
 
+  // The steps: one row each, in the order written.
+  EXPECT_EQ(raw.doubles("/steps/index"), std::vector<double>({1, 2, 3}));
+  EXPECT_EQ(raw.doubles("/steps/load"), std::vector<double>({1 / 3.0, 2 / 3.0, 1}));
+  EXPECT_EQ(raw.doubles("/steps/settling"), std::vector<double>({0, 0, 0}));
+  EXPECT_EQ(raw.doubles("/steps/newton_iterations"), std::vector<double>({3, 4, 5}));
+  EXPECT_EQ(raw.doubles("/steps/linear_iterations"), std::vector<double>({11, 21, 31}));
+  EXPECT_EQ(raw.doubles("/steps/energy"), std::vector<double>({0.5, 1, 1.5}));
+  EXPECT_EQ(raw.doubles("/steps/seconds"), std::vector<double>({0.01, 0.02, 0.01 * 3}));
+  EXPECT_EQ(raw.doubles("/steps/residual_count"), std::vector<double>({3, 4, 5}));
+  std::vector<double> residuals;
+  for (int k = 1; k <= 3; ++k)
+    for (const double r : step_record(k).residuals) residuals.push_back(r);
+  EXPECT_EQ(raw.doubles("/steps/residuals"), residuals);
+  EXPECT_EQ(raw.dims("/steps/x"), std::vector<hsize_t>({3, 12, 3}));
+  EXPECT_EQ(raw.dims("/steps/reactions"), std::vector<hsize_t>({3, 2, 3}));
+  EXPECT_EQ(raw.dims("/steps/contact_forces"), std::vector<hsize_t>({3, 2, 3}));
   for (int k = 1; k <= 3; ++k) {
     SCOPED_TRACE("step " + std::to_string(k));
-    const std::string g = "/steps/00000" + std::to_string(k);
+    const hsize_t row = hsize_t(k - 1);
     const StepRecord expected = step_record(k);
-    EXPECT_EQ(raw.attribute<int>(g, "index", H5T_NATIVE_INT), k);
-    EXPECT_EQ(raw.attribute<double>(g, "load", H5T_NATIVE_DOUBLE), k / 3.0);
-    EXPECT_EQ(raw.attribute<int>(g, "newton_iterations", H5T_NATIVE_INT), 2 + k);
-    EXPECT_EQ(raw.attribute<int>(g, "linear_iterations", H5T_NATIVE_INT), 10 * k + 1);
-    EXPECT_EQ(raw.attribute<double>(g, "energy", H5T_NATIVE_DOUBLE), 0.5 * k);
-    EXPECT_EQ(raw.attribute<double>(g, "seconds", H5T_NATIVE_DOUBLE), 0.01 * k);
-    EXPECT_EQ(raw.doubles(g + "/x"), row_major(x[k - 1]));
-    EXPECT_EQ(raw.dims(g + "/x"), std::vector<hsize_t>({12, 3}));
-    EXPECT_EQ(raw.doubles(g + "/displacement"), row_major(x[k - 1] - f_.mesh.X));
-    EXPECT_EQ(raw.doubles(g + "/residuals"), expected.residuals);
-    EXPECT_EQ(raw.doubles(g + "/reactions"),
+    EXPECT_EQ(raw.row("/steps/x", row), row_major(x[k - 1]));
+    EXPECT_EQ(raw.row("/steps/displacement", row), row_major(x[k - 1] - f_.mesh.X));
+    EXPECT_EQ(raw.row("/steps/reactions", row),
               std::vector<double>({1.0 / k, 2, 3, -1.0 / k, -2, -3}));
-    EXPECT_EQ(raw.dims(g + "/reactions"), std::vector<hsize_t>({2, 3}));
-    EXPECT_FALSE(raw.has(g + "/v"));
-    EXPECT_FALSE(raw.has_attribute(g, "kinetic_energy"));  // only with velocities
-    for (const char* field : {"stress", "strain", "contact_pressure", "blocks"})
-      EXPECT_FALSE(raw.has(g + "/" + field)) << field << " was not asked for";
-    EXPECT_EQ(raw.attribute<double>(g, "contact_area", H5T_NATIVE_DOUBLE), expected.contact_area());
-    EXPECT_EQ(raw.doubles(g + "/contact_forces"),
+    EXPECT_EQ(raw.row("/steps/contact_area", row), std::vector<double>({expected.contact_area()}));
+    EXPECT_EQ(raw.row("/steps/contact_forces", row),
               std::vector<double>({0.5 * k, -1, 2, 0, 0, double(k)}));
-    EXPECT_EQ(raw.dims(g + "/contact_forces"), std::vector<hsize_t>({2, 3}));
-    EXPECT_EQ(raw.doubles(g + "/contact_force_magnitudes"), std::vector<double>({3.0 * k, 4.0}));
-    EXPECT_EQ(raw.doubles(g + "/contact_areas"), std::vector<double>({0.01 * k, 0.02}));
+    EXPECT_EQ(raw.row("/steps/contact_force_magnitudes", row), std::vector<double>({3.0 * k, 4.0}));
+    EXPECT_EQ(raw.row("/steps/contact_areas", row), std::vector<double>({0.01 * k, 0.02}));
+    // A run with material-depth contact (it has depths) reports the penetration; these records
+    // carry none, which reads as NaN.
+    EXPECT_TRUE(std::isnan(raw.row("/steps/penetration", row).at(0)));
   }
-  EXPECT_EQ(raw.strings("/run/contact_names"),
-            std::vector<std::string>({"block/ball", "obstacle floor"}));
+  for (const char* field : {"v", "kinetic_energy", "stress", "strain", "contact_pressure"})
+    EXPECT_FALSE(raw.has(std::string("/steps/") + field)) << field << " was not asked for";
+  EXPECT_EQ(raw.texts("/timing/phases"),
+            std::vector<std::string>({"solve", "assembly", "contact"}));
+  EXPECT_EQ(raw.doubles("/timing/seconds"), std::vector<double>({2.5, 1.5, 0.25}));
 
   const ResultsSummary s = read_results_summary(path);
   EXPECT_EQ(s.num_nodes, 12);
@@ -348,6 +512,11 @@ TEST_F(ResultsFileTest, RoundTripOfMeshRunStepsAndTiming) {
   EXPECT_EQ(read_step_dataset(path, 2, "reactions"), step_record(2).reactions);
   EXPECT_EQ(read_step_dataset(path, 2, "residuals"),
             Eigen::Map<const VectorX>(step_record(2).residuals.data(), 4));
+  EXPECT_EQ(read_step_dataset(path, 3, "load"), Eigen::MatrixXd::Constant(1, 1, 1.0));
+  const StepState last = read_step_state(path);
+  EXPECT_EQ(last.index, 3);
+  EXPECT_EQ(last.load, 1.0);
+  EXPECT_EQ(last.x, x[2]);
 }
 
 // Every field a run can ask for: velocities (the initial one in the reference state), element
@@ -364,6 +533,7 @@ TEST_F(ResultsFileTest, FieldsOfAStepAndOfTheReferenceState) {
   const Points x = positions(f_.mesh, 1), v = Points::Constant(12, 3, -0.5);
   StepRecord step = step_record(1);
   step.kinetic_energy = 0.75;
+  step.penetration = 2e-4;
   step.surface.resize(tris);
   step.surface.force.row(2) = Vec3(1, -2, 3).transpose();
   step.surface.magnitude(2) = 4.0;
@@ -386,14 +556,14 @@ TEST_F(ResultsFileTest, FieldsOfAStepAndOfTheReferenceState) {
   }
   EXPECT_EQ(raw.doubles("/reference/volume_ratio"), std::vector<double>(12, 1.0));
 
-  const std::string g = "/steps/000001";
-  EXPECT_EQ(raw.doubles(g + "/v"), std::vector<double>(36, -0.5));
-  EXPECT_EQ(raw.attribute<double>(g, "kinetic_energy", H5T_NATIVE_DOUBLE), 0.75);
-  EXPECT_EQ(raw.doubles(g + "/stress"), row_major(elements.stress));
-  EXPECT_EQ(raw.dims(g + "/stress"), std::vector<hsize_t>({12, 6}));
-  EXPECT_EQ(raw.doubles(g + "/strain"), row_major(elements.strain));
-  EXPECT_EQ(raw.doubles(g + "/von_mises"), row_major(elements.von_mises));
-  EXPECT_EQ(raw.doubles(g + "/volume_ratio"), row_major(elements.volume_ratio));
+  EXPECT_EQ(raw.row("/steps/v", 0), std::vector<double>(36, -0.5));
+  EXPECT_EQ(raw.row("/steps/kinetic_energy", 0), std::vector<double>({0.75}));
+  EXPECT_EQ(raw.row("/steps/penetration", 0), std::vector<double>({2e-4}));
+  EXPECT_EQ(raw.row("/steps/stress", 0), row_major(elements.stress));
+  EXPECT_EQ(raw.dims("/steps/stress"), std::vector<hsize_t>({1, 12, 6}));
+  EXPECT_EQ(raw.row("/steps/strain", 0), row_major(elements.strain));
+  EXPECT_EQ(raw.row("/steps/von_mises", 0), row_major(elements.von_mises));
+  EXPECT_EQ(raw.row("/steps/volume_ratio", 0), row_major(elements.volume_ratio));
   // Triangle 2 at x: its current area A.
   const Vec3 a = x.row(f_.mesh.tris(2, 0)), b = x.row(f_.mesh.tris(2, 1)),
              c = x.row(f_.mesh.tris(2, 2));
@@ -409,10 +579,10 @@ TEST_F(ResultsFileTest, FieldsOfAStepAndOfTheReferenceState) {
     for (size_t i = 0; i < got.size(); ++i)
       EXPECT_NEAR(got[i], expected[i], 1e-14 * std::abs(expected[i])) << "entry " << i;
   };
-  near(raw.doubles(g + "/contact_pressure"), pressure);
-  near(raw.doubles(g + "/contact_traction"), traction);
-  near(raw.doubles(g + "/contact_gap"), gap);
-  near(raw.doubles(g + "/contact_fraction"), fraction);
+  near(raw.row("/steps/contact_pressure", 0), pressure);
+  near(raw.row("/steps/contact_traction", 0), traction);
+  near(raw.row("/steps/contact_gap", 0), gap);
+  near(raw.row("/steps/contact_fraction", 0), fraction);
 }
 
 TEST_F(ResultsFileTest, NoDepthWithoutMaterialDepthContact) {
@@ -422,7 +592,9 @@ TEST_F(ResultsFileTest, NoDepthWithoutMaterialDepthContact) {
     file.finish(false, "step 1: Newton did not converge");
   }
   EXPECT_FALSE(RawFile(path).has("/mesh/depth"));
-  EXPECT_EQ(read_text(dir_ / "failed.xmf").find("Name=\"depth\""), std::string::npos);
+  EXPECT_FALSE(RawFile(path).has("/steps/penetration"));
+  for (const std::string& sidecar : results_sidecars(path))
+    EXPECT_EQ(read_text(sidecar).find("Name=\"depth\""), std::string::npos) << sidecar;
   const ResultsSummary s = read_results_summary(path);
   EXPECT_EQ(s.status, "failed");
   EXPECT_EQ(s.message, "step 1: Newton did not converge");
@@ -430,6 +602,8 @@ TEST_F(ResultsFileTest, NoDepthWithoutMaterialDepthContact) {
   EXPECT_TRUE(s.timing.empty());
 }
 
+// A writer that dies (no destructor, no close) leaves a file whose completed steps every SWMR
+// reader finds, and sidecars that list them and are closed.
 TEST_F(ResultsFileTest, KilledWriterKeepsCompletedSteps) {
   const fs::path path = dir_ / "killed.h5";
   const Points x1 = positions(f_.mesh, 1), x2 = positions(f_.mesh, 2);
@@ -457,17 +631,61 @@ TEST_F(ResultsFileTest, KilledWriterKeepsCompletedSteps) {
   EXPECT_EQ(read_step_positions(path, 1), x1);
   EXPECT_EQ(read_step_positions(path, 2), x2);
   EXPECT_THROW(read_step_positions(path, 3), InputError);
-  // The sidecar is complete: the reference state and both steps, closed.
-  const std::string xmf = read_text(dir_ / "killed.xmf");
-  EXPECT_NE(xmf.find("killed.h5:/steps/000002/x<"), std::string::npos);
-  EXPECT_EQ(xmf.substr(xmf.size() - 8), "</Xdmf>\n");
+  // The sidecars are complete: the reference state and both steps, closed.
+  for (const std::string& sidecar : results_sidecars(path)) {
+    SCOPED_TRACE(sidecar);
+    const std::string xmf = read_text(sidecar);
+    EXPECT_NE(xmf.find("<Grid Name=\"step_1\""), std::string::npos);
+    EXPECT_EQ(xmf.substr(xmf.size() - 8), "</Xdmf>\n");
+  }
 }
 
-// Two bodies: each gets body-local tets and row views of the node and tet datasets.
-TEST_F(ResultsFileTest, EveryBodyViewsItsOwnRows) {
+// A disk that fills up (here: a limit on the file size, at several sizes so that it fills at
+// different moments) makes append_step throw InputError naming the file, never crash, and
+// neither does closing the file after it; every step written before stays readable.
+TEST_F(ResultsFileTest, FullDiskEndsInAnErrorAndKeepsTheStepsBefore) {
+  const Mesh mesh = single_body_mesh(box_mesh({Vec3::Zero(), Vec3::Ones(), {6, 6, 6}}));
+  for (const rlim_t room : {1100000, 1234567, 1500000, 2000000, 2345678}) {
+    SCOPED_TRACE("room " + std::to_string(room));
+    const fs::path path = dir_ / ("full" + std::to_string(room) + ".h5");
+    const pid_t child = fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+      signal(SIGXFSZ, SIG_IGN);  // writes beyond the limit fail with EFBIG instead
+      int code = 5;
+      try {
+        ResultsFile file(path, mesh, VectorX(), f_.info);
+        const rlimit limit{fs::file_size(path) + room, fs::file_size(path) + room};
+        setrlimit(RLIMIT_FSIZE, &limit);
+        for (int k = 1; k <= 1000; ++k) {
+          StepRecord s = step_record(k);
+          s.load = k / 1000.0;
+          file.append_step(s, positions(mesh, k), nullptr);
+        }
+        code = 6;  // never full
+      } catch (const InputError& e) {
+        code = std::string(e.what()).find(path.string()) != std::string::npos ? 3 : 4;
+      }
+      _exit(code);  // after the writer's destructor
+    }
+    int status = 0;
+    ASSERT_EQ(waitpid(child, &status, 0), child);
+    ASSERT_TRUE(WIFEXITED(status)) << "the writer crashed (signal " << WTERMSIG(status) << ")";
+    ASSERT_EQ(WEXITSTATUS(status), 3) << "4: an error not naming the file, 6: never full";
+    const ResultsSummary s = read_results_summary(path);
+    EXPECT_GE(s.num_steps, 1);
+    EXPECT_LT(s.num_steps, 1000);
+    for (Index k = 1; k <= s.num_steps; ++k)
+      EXPECT_EQ(read_step_positions(path, k), positions(mesh, int(k))) << "step " << k;
+  }
+}
+
+// Two bodies: each is a block of the sidecars with body-local tets, whose items select the
+// body's rows of the node and tet datasets of each state.
+TEST_F(ResultsFileTest, EveryBodyIsABlockOfItsOwnRows) {
   const fs::path path = dir_ / "bodies.h5";
   const Mesh mesh = two_bodies();
-  RunInfo info{"{}", "0.1.0", "static", 1, {}, {"neo_hookean", "rigid"}, {}, {}, {}};
+  RunInfo info{"{}", "0.1.0", "static", 1, {}, {}, {"neo_hookean", "rigid"}, {}, {}, {}};
   info.fields.stress = info.fields.strain = true;
   const Points x = positions(mesh, 1);
   const ElementFields elements = write_one_step(path, mesh, info);
@@ -482,29 +700,54 @@ TEST_F(ResultsFileTest, EveryBodyViewsItsOwnRows) {
     for (Index t = 0; t < body.num_tets; ++t)
       for (int c = 0; c < 4; ++c)
         EXPECT_EQ(local[4 * t + c], mesh.tets(body.first_tet + t, c) - body.first_node);
-    for (const std::string group : {"/reference", "/steps/000001"}) {
-      const std::string here = group + "/blocks/" + std::to_string(b) + "/";
-      const Points& positions = group == "/reference" ? mesh.X : x;
-      EXPECT_TRUE(raw.is_view(here + "x"));
-      EXPECT_EQ(raw.doubles(here + "x"),
-                row_major(positions.middleRows(body.first_node, body.num_nodes)));
-      EXPECT_EQ(raw.doubles(here + "displacement"),
-                row_major((positions - mesh.X).middleRows(body.first_node, body.num_nodes)));
-      if (group == "/reference") continue;
-      EXPECT_EQ(raw.doubles(here + "stress"),
-                row_major(elements.stress.middleRows(body.first_tet, body.num_tets)));
-      EXPECT_EQ(raw.doubles(here + "volume_ratio"),
-                row_major(elements.volume_ratio.segment(body.first_tet, body.num_tets)));
+  }
+  // Per sidecar and state (reference, step 1): block b's items read the body's rows.
+  for (const std::string& sidecar : results_sidecars(path)) {
+    SCOPED_TRACE(sidecar);
+    size_t unparsed = 0;
+    const std::vector<SidecarItem> items = sidecar_items(read_text(sidecar), "bodies.h5", unparsed);
+    EXPECT_EQ(unparsed, 0u);
+    expect_items_in_file(items, raw);
+    for (const int state : {0, 1}) {
+      const Points& at = state == 0 ? mesh.X : x;
+      for (Index b = 0; b < 2; ++b) {
+        const Body& body = mesh.bodies[b];
+        // The item of `dataset` in this state that selects `count` rows from `first`.
+        const auto item = [&](const std::string& dataset, Index first, Index count) {
+          const std::string full = (state == 0 ? "/reference/" : "/steps/") + dataset;
+          const size_t rows = state == 0 ? 0 : 1;  // the dimension of nodes or tets
+          const auto found = std::find_if(items.begin(), items.end(), [&](const SidecarItem& i) {
+            return i.dataset == full && i.selection && i.start.size() > rows &&
+                   i.start[rows] == hsize_t(first) && i.count[rows] == hsize_t(count);
+          });
+          return found == items.end() ? SidecarItem{} : *found;
+        };
+        const auto nodes = [&](const char* dataset) {
+          return item(dataset, body.first_node, body.num_nodes);
+        };
+        const auto tets = [&](const char* dataset) {
+          return item(dataset, body.first_tet, body.num_tets);
+        };
+        EXPECT_EQ(read_item(raw, nodes("x")),
+                  row_major(at.middleRows(body.first_node, body.num_nodes)));
+        EXPECT_EQ(read_item(raw, nodes("displacement")),
+                  row_major((at - mesh.X).middleRows(body.first_node, body.num_nodes)));
+        if (state == 0) continue;
+        EXPECT_EQ(read_item(raw, tets("stress")),
+                  row_major(elements.stress.middleRows(body.first_tet, body.num_tets)));
+        EXPECT_EQ(read_item(raw, tets("volume_ratio")),
+                  row_major(elements.volume_ratio.segment(body.first_tet, body.num_tets)));
+      }
     }
   }
 }
 
 // A body with two element regions (interleaved in its mesh: every third tet in "patella") between
-// a body without regions and one with a single region: the sidecar shows four blocks, the
+// a body without regions and one with a single region: the sidecars show four blocks, the
 // two-region body as one per region, named after body, region and the region's material, with
 // the body's nodes and the region's tets, in the regions' order in the body (patella first: tet 0
 // is in it). Every block's tets (block-local) are its region's tets of the original mesh in their
-// order, and the per-tet fields it views are the rows of those tets.
+// order, and the per-tet fields it shows are the rows of those tets.
 TEST_F(ResultsFileTest, EveryRegionOfABodyIsABlockOfItsOwn) {
   const fs::path path = dir_ / "regions.h5";
   const TetMesh cube = box_mesh({Vec3(0, 0, 0), Vec3(1, 1, 1), Eigen::Vector3i(1, 1, 1)});
@@ -524,6 +767,7 @@ TEST_F(ResultsFileTest, EveryRegionOfABodyIsABlockOfItsOwn) {
                "0.1.0",
                "static",
                1,
+               {},
                {},
                {"neo_hookean", "mooney_rivlin, neo_hookean", "rigid"},
                {"neo_hookean", "mooney_rivlin", "rigid"},
@@ -556,132 +800,173 @@ TEST_F(ResultsFileTest, EveryRegionOfABodyIsABlockOfItsOwn) {
       {"leg/soft (mooney_rivlin)", in_leg.first_node, in_leg.first_tet + Index(original[1].size()),
        original[0], &leg},
       {"bone (rigid)", in_bone.first_node, in_bone.first_tet, all6, &bone}};
-  const std::string xmf = read_text(dir_ / "regions.xmf");
   for (size_t k = 0; k < blocks.size(); ++k) {
     const Expected& e = blocks[k];
     SCOPED_TRACE(e.name);
-    const Index num_nodes = Index(e.body->X.rows()), num_tets = Index(e.tets.size());
-    const std::string block = "blocks/" + std::to_string(k) + "/";
-    // In the sidecar, once per state: the block's name, then its tets and points.
-    const std::string grid =
-        "<Grid Name=\"" + e.name +
-        "\" GridType=\"Uniform\">\n"
-        "          <Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"" +
-        std::to_string(num_tets) + "\"><DataItem Dimensions=\"" + std::to_string(num_tets) +
-        " 4\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">regions.h5:/mesh/" + block +
-        "tets</DataItem></Topology>\n";
-    const size_t first = xmf.find(grid);
-    EXPECT_NE(first, std::string::npos);
-    EXPECT_NE(xmf.find(grid, first + 1), std::string::npos) << "in the reference and the step";
-    EXPECT_NE(xmf.find("<Geometry GeometryType=\"XYZ\"><DataItem Dimensions=\"" +
-                       std::to_string(num_nodes) +
-                       " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">regions.h5:"
-                       "/steps/000001/" +
-                       block + "x<"),
-              std::string::npos);
-    EXPECT_EQ(raw.string_attribute("/mesh/" + block.substr(0, block.size() - 1), "name"), e.name);
+    const Index num_tets = Index(e.tets.size());
+    const std::string block = "/mesh/blocks/" + std::to_string(k);
+    EXPECT_EQ(raw.string_attribute(block, "name"), e.name);
     // Block-local tets: the region's tets of the body's mesh, in their order.
-    const std::vector<int> local = raw.values<int>("/mesh/" + block + "tets", H5T_NATIVE_INT, dims);
+    const std::vector<int> local = raw.values<int>(block + "/tets", H5T_NATIVE_INT, dims);
     ASSERT_EQ(dims, std::vector<hsize_t>({hsize_t(num_tets), 4}));
     for (Index t = 0; t < num_tets; ++t)
       for (int c = 0; c < 4; ++c)
         EXPECT_EQ(local[4 * t + c], e.body->tets(e.tets[t], c)) << "tet " << t;
-    // Views: the body's nodes, the region's rows of the tet fields.
-    const std::string here = "/steps/000001/" + block;
-    EXPECT_EQ(raw.doubles(here + "x"), row_major(x.middleRows(e.first_node, num_nodes)));
-    EXPECT_EQ(raw.doubles(here + "stress"),
-              row_major(elements.stress.middleRows(e.first_tet, num_tets)));
-    EXPECT_EQ(raw.doubles(here + "volume_ratio"),
-              row_major(elements.volume_ratio.segment(e.first_tet, num_tets)));
   }
-  EXPECT_EQ(xmf.find("<Grid Name=\"leg"), xmf.find("<Grid Name=\"leg/patella"))
-      << "no block for the whole two-region body";
+  for (const std::string& sidecar : results_sidecars(path)) {
+    SCOPED_TRACE(sidecar);
+    const std::string xmf = read_text(sidecar);
+    size_t unparsed = 0;
+    const std::vector<SidecarItem> items = sidecar_items(xmf, "regions.h5", unparsed);
+    EXPECT_EQ(unparsed, 0u);
+    expect_items_in_file(items, raw);
+    // Per state: 4 blocks of 7 items (tets, x, displacement, stress, von Mises, strain, volume
+    // ratio), then the boundary's 4 (triangles, x, body, displacement).
+    ASSERT_EQ(items.size(), 2u * (4 * 7 + 4));
+    // The step's blocks, as the document lists them, after the blocks of the reference state.
+    std::vector<std::string> names;
+    const std::regex grid(R"re(<Grid Name="([^"]+)" GridType="Uniform">)re");
+    for (std::sregex_iterator m(xmf.begin(), xmf.end(), grid), end; m != end; ++m)
+      names.push_back((*m)[1]);
+    ASSERT_EQ(names.size(), 2u * 5);
+    const std::string xdmf2_order = sidecar.substr(sidecar.size() - 6);
+    for (size_t k = 0; k < blocks.size(); ++k) {
+      const Expected& e = blocks[k];
+      SCOPED_TRACE(e.name);
+      const Index num_nodes = Index(e.body->X.rows()), num_tets = Index(e.tets.size());
+      EXPECT_EQ(names[5 + k], e.name);
+      // The items of block k in the step (the document order of the items of one state).
+      const auto of_step = [&](const std::string& dataset) {
+        const auto found = std::find_if(items.begin(), items.end(), [&](const SidecarItem& i) {
+          return i.dataset == dataset && i.selection && i.start.size() > 1 && i.start[0] == 0 &&
+                 i.count[1] == hsize_t(dataset == "/steps/x" ? num_nodes : num_tets) &&
+                 i.start[1] == hsize_t(dataset == "/steps/x" ? e.first_node : e.first_tet);
+        });
+        return found == items.end() ? SidecarItem{} : *found;
+      };
+      EXPECT_NE(std::find_if(items.begin(), items.end(),
+                             [&](const SidecarItem& i) {
+                               return i.dataset == "/mesh/blocks/" + std::to_string(k) + "/tets" &&
+                                      !i.selection;
+                             }),
+                items.end());
+      EXPECT_EQ(read_item(raw, of_step("/steps/x")),
+                row_major(x.middleRows(e.first_node, num_nodes)));
+      EXPECT_EQ(read_item(raw, of_step("/steps/stress")),
+                row_major(elements.stress.middleRows(e.first_tet, num_tets)));
+      EXPECT_EQ(read_item(raw, of_step("/steps/volume_ratio")),
+                row_major(elements.volume_ratio.segment(e.first_tet, num_tets)));
+    }
+    EXPECT_EQ(std::count(names.begin(), names.end(), "leg (mooney_rivlin, neo_hookean)"), 0)
+        << "no block for the whole two-region body";
+  }
 }
 
-// The sidecar: one temporal collection of states (the reference state at time 0, then every step
-// at its exact load), each a spatial collection of one tetrahedral grid per body, named after the
-// body and its material, and the boundary grid with the step's values as field data. Every HDF5
-// dataset it names exists in the results file with the dimensions it states.
+// The sidecars: one temporal collection of states (the reference state at time 0, then every
+// step at its exact load), each a spatial collection of one tetrahedral grid per body, named
+// after the body and its material, and the boundary grid with the step's values as field data.
+// Every HDF5 dataset an item names exists in the results file with the dimensions it states, and
+// a step's items read that step's row. Each step is appended: what was there stays as it was.
 TEST_F(ResultsFileTest, XdmfSidecarStructure) {
   const fs::path path = dir_ / "sidecar.h5";
   const Mesh mesh = two_bodies();
-  RunInfo info{"{}", "0.1.0", "dynamic", 1, {"clamp"}, {"neo_hookean", "rigid"}, {}, {}, {}};
+  RunInfo info{"{}",
+               "0.1.0",
+               "dynamic",
+               1,
+               {"clamp"},
+               {"block/ball", "obstacle floor"},
+               {"neo_hookean", "rigid"},
+               {},
+               {},
+               {}};
   info.fields = {
       .velocity = true, .displacement = true, .stress = true, .strain = true, .contact = true};
   info.initial_velocity = Points::Zero(mesh.num_nodes(), 3);
   const VectorX depth = VectorX::LinSpaced(mesh.num_nodes(), 0, 1);
-  std::vector<std::string> texts;
+  const std::vector<std::string> sidecars = results_sidecars(path);
+  ASSERT_EQ(sidecars.size(), 2u);
+  EXPECT_EQ(fs::path(sidecars[0]).filename(), "sidecar.xmf");
+  EXPECT_EQ(fs::path(sidecars[1]).filename(), "sidecar.xdmf2");
+  std::vector<std::vector<std::string>> texts(2);
+  std::vector<Points> x;
   {
     ResultsFile file(path, mesh, depth, info);
-    texts.push_back(read_text(dir_ / "sidecar.xmf"));
+    for (size_t d = 0; d < 2; ++d) texts[d].push_back(read_text(sidecars[d]));
     for (int k = 1; k <= 2; ++k) {
       StepRecord s = step_record(k);
       s.load = k == 1 ? 0.44 : 0.5;
       s.reactions = Eigen::Matrix<double, 1, 3>(1.5, -2, 0.1 * k);
       s.surface.resize(mesh.num_tris());
-      const Points x = positions(mesh, k);
+      x.push_back(positions(mesh, k));
       const ElementFields e = element_values(mesh.num_tets(), k);
-      file.append_step(s, x, &x, &e);
-      texts.push_back(read_text(dir_ / "sidecar.xmf"));
+      file.append_step(s, x.back(), &x.back(), &e);
+      for (size_t d = 0; d < 2; ++d) texts[d].push_back(read_text(sidecars[d]));
     }
   }
-  const std::string& xmf = texts.back();
-  const auto count = [&](const std::string& what) {
-    size_t n = 0;
-    for (size_t at = xmf.find(what); at != std::string::npos; at = xmf.find(what, at + 1)) ++n;
-    return n;
-  };
-  EXPECT_EQ(count("CollectionType=\"Temporal\""), 1u);
-  EXPECT_EQ(count("CollectionType=\"Spatial\""), 3u);
-  EXPECT_EQ(count("<Grid Name=\"reference\" GridType=\"Collection\""), 1u);
-  EXPECT_EQ(count("<Time Value=\"0\"/>"), 1u);
-  EXPECT_EQ(count("<Time Value=\"0.44\"/>"), 1u);
-  EXPECT_EQ(count("<Time Value=\"0.5\"/>"), 1u);
-  EXPECT_EQ(count("<Grid Name=\"left (neo_hookean)\" GridType=\"Uniform\">"), 3u);
-  EXPECT_EQ(count("<Grid Name=\"right (rigid)\" GridType=\"Uniform\">"), 3u);
-  EXPECT_EQ(count("<Grid Name=\"boundary\" GridType=\"Uniform\">"), 3u);
-  // Per step: step, load, settling, newton_iterations, linear_iterations, residual, energy,
-  // kinetic_energy, the reaction, the total contact area and three values per interface; none
-  // for the reference.
-  EXPECT_EQ(count("Center=\"Grid\""), 2u * 16);
-  EXPECT_EQ(count("<Attribute Name=\"energy\" AttributeType=\"Scalar\" Center=\"Grid\"><DataItem "
-                  "Dimensions=\"1\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">1<"),
-            1u);
-  EXPECT_EQ(count("<Attribute Name=\"reaction clamp\" AttributeType=\"Vector\" Center=\"Grid\">"
-                  "<DataItem Dimensions=\"1 3\" NumberType=\"Float\" Precision=\"8\" "
-                  "Format=\"XML\">1.5 -2 0.2<"),
-            1u);
-  EXPECT_EQ(count("contact_force block/ball"), 2u);
-  for (const char* name :
-       {"displacement", "velocity", "depth", "stress", "von_mises", "strain", "volume_ratio"})
-    EXPECT_EQ(
-        count("<Attribute Name=\"" + std::string(name) + "\""),
-        3u * 2 + (name == std::string("displacement") || name == std::string("depth") ? 3 : 0))
-        << name;
-  EXPECT_EQ(count("<Attribute Name=\"contact_pressure\""), 3u);
-  EXPECT_EQ(count(dir_.string()), 0u) << "the HDF5 file must be referenced relatively";
-  EXPECT_EQ(xmf.substr(xmf.size() - 8), "</Xdmf>\n");
-
-  // Every HDF5 dataset it names, with its dimensions.
   const RawFile raw(path);
-  const std::regex item(
-      R"re(<DataItem Dimensions="([0-9 ]+)" NumberType="(Float|Int)" Precision="(4|8)" Format="HDF">sidecar\.h5:([^<]+)</DataItem>)re");
-  size_t items = 0;
-  for (std::sregex_iterator m(xmf.begin(), xmf.end(), item), end; m != end; ++m, ++items) {
-    const std::string dataset = (*m)[4];
-    SCOPED_TRACE(dataset);
-    ASSERT_TRUE(raw.has(dataset));
-    std::string dims;
-    for (const hsize_t d : raw.dims(dataset)) dims += (dims.empty() ? "" : " ") + std::to_string(d);
-    EXPECT_EQ(dims, (*m)[1].str());
-  }
-  EXPECT_EQ(items, 3u * (2 * 9 + 9)) << "per state: 2 blocks x 9 items, boundary 9";
+  for (size_t d = 0; d < 2; ++d) {
+    SCOPED_TRACE(sidecars[d]);
+    const std::string& xmf = texts[d].back();
+    const auto count = [&](const std::string& what) {
+      size_t n = 0;
+      for (size_t at = xmf.find(what); at != std::string::npos; at = xmf.find(what, at + 1)) ++n;
+      return n;
+    };
+    EXPECT_EQ(count("CollectionType=\"Temporal\""), 1u);
+    EXPECT_EQ(count("CollectionType=\"Spatial\""), 3u);
+    EXPECT_EQ(count("<Grid Name=\"reference\" GridType=\"Collection\""), 1u);
+    EXPECT_EQ(count("<Time Value=\"0\"/>"), 1u);
+    EXPECT_EQ(count("<Time Value=\"0.44\"/>"), 1u);
+    EXPECT_EQ(count("<Time Value=\"0.5\"/>"), 1u);
+    EXPECT_EQ(count("<Grid Name=\"left (neo_hookean)\" GridType=\"Uniform\">"), 3u);
+    EXPECT_EQ(count("<Grid Name=\"right (rigid)\" GridType=\"Uniform\">"), 3u);
+    EXPECT_EQ(count("<Grid Name=\"boundary\" GridType=\"Uniform\">"), 3u);
+    // Per step: step, load, settling, newton_iterations, linear_iterations, residual, energy,
+    // kinetic_energy, the reaction, the total contact area and three values per interface; none
+    // for the reference.
+    EXPECT_EQ(count("Center=\"Grid\""), 2u * 16);
+    EXPECT_EQ(count("<Attribute Name=\"energy\" AttributeType=\"Scalar\" Center=\"Grid\"><DataItem "
+                    "Dimensions=\"1\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">1<"),
+              1u);
+    EXPECT_EQ(count("<Attribute Name=\"reaction clamp\" AttributeType=\"Vector\" Center=\"Grid\">"
+                    "<DataItem Dimensions=\"1 3\" NumberType=\"Float\" Precision=\"8\" "
+                    "Format=\"XML\">1.5 -2 0.2<"),
+              1u);
+    EXPECT_EQ(count("contact_force block/ball"), 2u);
+    for (const char* name :
+         {"displacement", "velocity", "depth", "stress", "von_mises", "strain", "volume_ratio"})
+      EXPECT_EQ(
+          count("<Attribute Name=\"" + std::string(name) + "\""),
+          3u * 2 + (name == std::string("displacement") || name == std::string("depth") ? 3 : 0))
+          << name;
+    EXPECT_EQ(count("<Attribute Name=\"contact_pressure\""), 3u);
+    EXPECT_EQ(count(dir_.string()), 0u) << "the HDF5 file must be referenced relatively";
+    EXPECT_EQ(xmf.substr(xmf.size() - 8), "</Xdmf>\n");
 
-  // Each step was appended: what was written before (less the closing tags) stays as it was.
-  for (size_t k = 1; k < texts.size(); ++k) {
-    const std::string before =
-        texts[k - 1].substr(0, texts[k - 1].rfind("    </Grid>\n  </Domain>"));
-    EXPECT_EQ(texts[k].compare(0, before.size(), before), 0) << "step " << k << " rewrote the file";
+    size_t unparsed = 0;
+    const std::vector<SidecarItem> items = sidecar_items(xmf, "sidecar.h5", unparsed);
+    EXPECT_EQ(unparsed, 0u);
+    EXPECT_EQ(items.size(), 3u * (2 * 9 + 9)) << "per state: 2 blocks x 9 items, boundary 9";
+    expect_items_in_file(items, raw);
+    // The boundary's positions at each step: all of row k of /steps/x, stated as k + 1 rows.
+    for (hsize_t k = 0; k < 2; ++k) {
+      const auto boundary = std::find_if(items.begin(), items.end(), [&](const SidecarItem& i) {
+        return i.dataset == "/steps/x" && i.start == std::vector<hsize_t>({k, 0, 0}) &&
+               i.count == std::vector<hsize_t>({1, hsize_t(mesh.num_nodes()), 3});
+      });
+      ASSERT_NE(boundary, items.end()) << "step row " << k;
+      EXPECT_EQ(boundary->dims, std::vector<hsize_t>({k + 1, hsize_t(mesh.num_nodes()), 3}));
+      EXPECT_EQ(read_item(raw, *boundary), row_major(x[k]));
+    }
+
+    // Each step was appended: what was written before (less the closing tags) stays as it was.
+    for (size_t k = 1; k < texts[d].size(); ++k) {
+      const std::string before =
+          texts[d][k - 1].substr(0, texts[d][k - 1].rfind("    </Grid>\n  </Domain>"));
+      EXPECT_EQ(texts[d][k].compare(0, before.size(), before), 0)
+          << "step " << k << " rewrote the file";
+    }
   }
 }
 
@@ -698,13 +983,16 @@ TEST_F(ResultsFileTest, SettlingStepsGetTimesOfTheirOwn) {
       file.append_step(s, positions(f_.mesh, k), nullptr);
     }
   }
-  const std::string xmf = read_text(dir_ / "settle.xmf");
-  std::vector<std::string> times;
-  const std::regex time(R"re(<Time Value="([^"]+)"/>)re");
-  for (std::sregex_iterator m(xmf.begin(), xmf.end(), time), end; m != end; ++m)
-    times.push_back((*m)[1]);
-  EXPECT_EQ(times, std::vector<std::string>({"0", "0.5", "1", "2", "3"}));
-  EXPECT_EQ(RawFile(path).attribute<double>("/steps/000004", "load", H5T_NATIVE_DOUBLE), 1.0);
+  for (const std::string& sidecar : results_sidecars(path)) {
+    const std::string xmf = read_text(sidecar);
+    std::vector<std::string> times;
+    const std::regex time(R"re(<Time Value="([^"]+)"/>)re");
+    for (std::sregex_iterator m(xmf.begin(), xmf.end(), time), end; m != end; ++m)
+      times.push_back((*m)[1]);
+    EXPECT_EQ(times, std::vector<std::string>({"0", "0.5", "1", "2", "3"})) << sidecar;
+  }
+  EXPECT_EQ(RawFile(path).doubles("/steps/load"), std::vector<double>({0.5, 1, 1, 1}));
+  EXPECT_EQ(RawFile(path).doubles("/steps/settling"), std::vector<double>({0, 0, 1, 1}));
 }
 
 TEST_F(ResultsFileTest, RejectsStepsThatDoNotMatchTheRun) {
@@ -717,18 +1005,23 @@ TEST_F(ResultsFileTest, RejectsStepsThatDoNotMatchTheRun) {
   s.reactions.resize(1, 3);
   EXPECT_THROW(file.append_step(s, x, nullptr), InputError);
   s = step_record(1);
-  file.append_step(s, x, nullptr);
-  StepRecord other_interfaces = step_record(2);
+  StepRecord other_interfaces = step_record(1);
   other_interfaces.contact.pop_back();
   EXPECT_THROW(file.append_step(other_interfaces, x, nullptr), InputError);
+  file.append_step(s, x, nullptr);
   try {
     file.append_step(s, x, nullptr);
     FAIL() << "a step written twice was accepted";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("/steps/000001"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("step 1: steps must come in increasing order"),
+              std::string::npos)
+        << e.what();
   }
+  EXPECT_EQ(read_results_summary(path).num_steps, 1) << "the refused steps left no trace";
   EXPECT_THROW(ResultsFile(dir_ / "no_such_dir" / "x.h5", f_.mesh, f_.depth, f_.info), InputError);
+  for (const char* sidecar : {"x.xmf", "x.xdmf2"})
+    EXPECT_THROW(ResultsFile(dir_ / sidecar, f_.mesh, f_.depth, f_.info), InputError) << sidecar;
 
   RunInfo fields = f_.info;
   fields.fields = {
@@ -745,6 +1038,22 @@ TEST_F(ResultsFileTest, RejectsStepsThatDoNotMatchTheRun) {
   more.append_step(t, x, &x, &e);
   fields.initial_velocity = Points::Zero(11, 3);
   EXPECT_THROW(ResultsFile(dir_ / "v.h5", f_.mesh, f_.depth, fields), InputError);
+}
+
+// A second writer of the same file is refused before it touches the file.
+TEST_F(ResultsFileTest, SecondWriterIsRefused) {
+  const fs::path path = dir_ / "twice.h5";
+  ResultsFile first(path, f_.mesh, f_.depth, f_.info);
+  first.append_step(step_record(1), positions(f_.mesh, 1), nullptr);
+  try {
+    ResultsFile second(path, f_.mesh, f_.depth, f_.info);
+    FAIL() << "a second writer was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("is being written by another depthfem run"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(read_results_summary(path).num_steps, 1);
 }
 
 // Runs `read`, which must throw InputError with a message that names `path` and contains `what`.
@@ -774,8 +1083,9 @@ TEST_F(ResultsFileTest, ReadingRejectsMissingAndForeignFiles) {
     file.append_step(step_record(1), positions(f_.mesh, 1), nullptr);
   }
   expect_input_error([&] { read_step_dataset(run, 1, "stress"); }, run,
-                     "no dataset /steps/000001/stress");
-  expect_input_error([&] { read_step_dataset(run, 4, "x"); }, run, "no step 4");
+                     "has no dataset /steps/stress");
+  expect_input_error([&] { read_step_dataset(run, 4, "x"); }, run, "has no step 4 (steps 1 to 1)");
+  expect_input_error([&] { read_step_state(run, 0); }, run, "has no step 0");
 }
 
 }  // namespace
