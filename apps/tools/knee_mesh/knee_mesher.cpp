@@ -719,6 +719,62 @@ void write_msh(const TetMesh& m, const std::vector<Group>& groups, const std::st
   if (!out) throw Fail(path + ": write failed");
 }
 
+// How smooth each bone's surface mesh is, as a Markdown table: the largest angle between the
+// normals of two boundary triangles that share an edge (edges with both ends on a cut plane, the
+// cut's rim among them, left out), the number of edges where it exceeds 60 and 90 degrees, and
+// the largest distance of a boundary vertex off a cut plane from the bone's input surfaces (a
+// fin of the bone reaching into the tissue stands off them; the tibia's are the tibia and the
+// fibula, so the soft tissue between them made bone stands off by up to half the merge width).
+std::string bone_surface_statistics(const TetMesh& m, const Anatomy& a) {
+  const auto on_cut = [&](long v) { return m.xyz[v][2] == kZLow || m.xyz[v][2] == kZHigh; };
+  const std::array<std::vector<const Surface*>, 3> inputs = {
+      std::vector<const Surface*>{a.femur.get()},
+      {a.tibia.get(), a.fibula.get()},
+      {a.patella.get()}};
+  std::ostringstream s;
+  char buf[256];
+  s << "bone surfaces: angle between the normals of boundary triangles sharing an edge (edges on "
+       "the cut planes left out), distance of boundary vertices from the input surfaces\n\n"
+       "| bone | largest angle [deg] | edges above 60 deg | edges above 90 deg | largest distance "
+       "[mm] |\n|---|---|---|---|---|\n";
+  for (int l = 1; l < kSoftTissue; ++l) {
+    const std::vector<Face> faces = boundary_faces(m, l);
+    std::vector<Eigen::Vector3d> normal;
+    std::map<std::pair<long, long>, std::vector<size_t>> edge_faces;
+    for (size_t i = 0; i < faces.size(); ++i) {
+      const Face& f = faces[i];
+      const auto x = [&](int k) { return Eigen::Vector3d(m.xyz[f[k]].data()); };
+      normal.push_back((x(1) - x(0)).cross(x(2) - x(0)).normalized());
+      for (int k = 0; k < 3; ++k) edge_faces[std::minmax(f[k], f[(k + 1) % 3])].push_back(i);
+    }
+    double largest = 0;
+    int above_60 = 0, above_90 = 0;
+    for (const auto& [edge, list] : edge_faces) {
+      if (on_cut(edge.first) && on_cut(edge.second)) continue;
+      const double angle =
+          std::acos(std::clamp(normal[list[0]].dot(normal[list[1]]), -1.0, 1.0)) * 180 / M_PI;
+      largest = std::max(largest, angle);
+      above_60 += angle > 60;
+      above_90 += angle > 90;
+    }
+    double off = 0;
+    std::vector<char> seen(m.xyz.size(), 0);
+    for (const Face& f : faces)
+      for (long v : f) {
+        if (on_cut(v) || seen[v]) continue;
+        seen[v] = 1;
+        const Point p(m.xyz[v][0], m.xyz[v][1], m.xyz[v][2]);
+        double d = 1e300;
+        for (const Surface* input : inputs[l - 1]) d = std::min(d, input->distance(p));
+        off = std::max(off, d);
+      }
+    std::snprintf(buf, sizeof buf, "| %s | %.1f | %d | %d | %.2f |\n", kLabelName[l], largest,
+                  above_60, above_90, off);
+    s << buf;
+  }
+  return s.str();
+}
+
 // Mesh statistics as a Markdown table.
 std::string statistics(const TetMesh& m, const std::vector<Group>& groups, const Options& o,
                        const Axis& axis, const std::vector<std::pair<int, double>>& clearance) {
@@ -908,7 +964,7 @@ int main(int argc, char** argv) {
         statistics(mesh, groups, o, axis, sweep_clearance(a, axis)) +
         "\ntets with all four vertices on their region's boundary: " + std::to_string(split) +
         " split at their centroid, " + std::to_string(left) + " left (they would split into " +
-        "tets with a dihedral angle below 5 degrees)\n";
+        "tets with a dihedral angle below 5 degrees)\n\n" + bone_surface_statistics(mesh, a);
     std::cerr << "knee_mesher: " << o.out << " in " << seconds << " s\n";
     std::cout << stats;
     if (!o.stats.empty()) std::ofstream(o.stats) << stats;
