@@ -14,8 +14,9 @@
 // --reuse sets DirectSolverOptions::reuse_tolerance (0: factor every matrix).
 // hertz: the first increment of hertz_sphere alone (the sphere pushed 1 mm into the undeformed
 //   block: an indefinite Hessian at first), S core cells per edge (12: the shipped mesh).
-// knee: the first 3 degrees of knee_flexion in one increment (contact makes the Hessian
-//   indefinite after the first Newton step), on the shipped mesh whatever S.
+// knee: the first 3 degrees of knee_flexion in one increment, on the shipped mesh whatever S
+//   (on the mesh before the joint space's curves were protected, contact made the Hessian
+//   indefinite after the first Newton step; on the present one both fallbacks run alike).
 // Per Newton iteration: wall time of the steps (failed attempts included), of the linear solve
 // alone, of force/stiffness, and the CPU time of the run (all threads; less sensitive than wall
 // time to other jobs on a shared machine). Peak memory is the process's maximum resident set.
