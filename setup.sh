@@ -2,14 +2,15 @@
 # Installs the Debian packages depthfem needs (only those missing), then configures and builds
 # in Release. Runs as root without prompts; a non-root user needs sudo for the install step.
 # Usage: ./setup.sh            install + build
-#        ./setup.sh --test     install + build + run the whole test suite
+#        ./setup.sh --test     install + build + run the whole test suite, then the sanitizer
+#                              tests and a bounded fuzz pass (tests/fuzz/run.sh)
 #        ./setup.sh --demo     install + build + run the demo scene (HDF5 results + PNG picture)
 set -euo pipefail
 cd "$(dirname "$0")"
 
 packages=(build-essential cmake pkg-config libeigen3-dev libtbb-dev libsundials-dev libhdf5-dev
           libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libsuitesparse-dev
-          libopenblas-dev petsc-dev clang-format
+          libopenblas-dev petsc-dev clang-format clang libclang-rt-14-dev
           python3-h5py python3-numpy python3-matplotlib)
 missing=()
 for p in "${packages[@]}"; do
@@ -29,7 +30,10 @@ cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
 cmake --build build -j"$jobs"
 
 case "${1:-}" in
-  --test) ctest --test-dir build --output-on-failure -j"$jobs" ;;
+  --test)
+    ctest --test-dir build --output-on-failure -j"$jobs"
+    tests/fuzz/run.sh 60
+    ;;
   --demo) ./apps/demo.sh ;;
   "") ;;
   *) echo "setup: unknown option '$1' (expected --test or --demo)" >&2; exit 2 ;;

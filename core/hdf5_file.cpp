@@ -95,7 +95,7 @@ H5File::Reservation H5File::reserve(hsize_t bytes) const {
   if (error != 0) {
     give_back();  // what the failed allocation may have added
     fail("no room for " + std::to_string(bytes / 1024) + " KiB more (" + std::strerror(error) +
-         "); the steps written so far are kept");
+         ")");
   }
   return Reservation(*this);
 }
