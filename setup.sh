@@ -32,7 +32,7 @@ cmake --build build -j"$jobs"
 case "${1:-}" in
   --test)
     ctest --test-dir build --output-on-failure -j"$jobs"
-    tests/fuzz/run.sh 60
+    tests/fuzz/run.sh 45
     ;;
   --demo) ./apps/demo.sh ;;
   "") ;;

@@ -89,6 +89,18 @@ void BM_DirectAnalysis(benchmark::State& state) {
   set_counters(state, p);
 }
 
+// The prediction from the block graph alone (predicted_factor_flops): what auto compares with
+// auto_flops_per_entry, before any analysis of the scalar pattern.
+void BM_PredictedFlops(benchmark::State& state) {
+  const Problem& p = cantilever(static_cast<int>(state.range(0)));
+  double flops = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(flops = predicted_factor_flops(p.A));
+  state.counters["predicted_flops"] = flops;
+  state.counters["flops_per_entry"] =
+      flops / ((9.0 * p.A.num_blocks() + 3.0 * p.A.num_nodes()) / 2);
+  set_counters(state, p);
+}
+
 // Factorisation and solve with the analysis kept: what a Newton iteration costs.
 void BM_DirectRepeatSolve(benchmark::State& state) {
   const Problem& p = cantilever(static_cast<int>(state.range(0)));
@@ -116,6 +128,10 @@ void BM_AmgRepeatSolve(benchmark::State& state) {
 
 BENCHMARK(BM_DirectAnalysis)
     ->ArgsProduct({{40, 70, 80, 100, 140, 160, 200, 260}, {0, 1, 2}, {1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_PredictedFlops)
+    ->ArgsProduct({{40, 70, 80, 100, 140, 160, 200, 260}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK(BM_DirectRepeatSolve)

@@ -15,12 +15,30 @@ void SparsityBuilder::add_clique(std::span<const Index> nodes) {
     for (Index b : nodes) pairs_.emplace_back(a, b);
 }
 
-std::vector<std::pair<Index, Index>> SparsityBuilder::pairs() const {
-  std::vector<std::pair<Index, Index>> p = pairs_;
-  for (Index i = 0; i < num_nodes_; ++i) p.emplace_back(i, i);
-  std::sort(p.begin(), p.end());
-  p.erase(std::unique(p.begin(), p.end()), p.end());
-  return p;
+// The pairs bucketed by row (a counting sort, linear in their number), then each row's few
+// columns sorted and deduplicated in place.
+SparsityBuilder::Rows SparsityBuilder::rows() const {
+  const size_t n = static_cast<size_t>(num_nodes_);
+  std::vector<size_t> bucket(n + 1, 1);  // every row holds its diagonal
+  bucket[0] = 0;
+  for (const auto& [a, b] : pairs_) ++bucket[static_cast<size_t>(a) + 1];
+  for (size_t i = 0; i < n; ++i) bucket[i + 1] += bucket[i];
+  std::vector<Index> all(bucket[n]);
+  std::vector<size_t> next(bucket.begin(), bucket.end() - 1);
+  for (size_t i = 0; i < n; ++i) all[next[i]++] = static_cast<Index>(i);
+  for (const auto& [a, b] : pairs_) all[next[static_cast<size_t>(a)]++] = b;
+  Rows out{std::vector<Index>(n + 1, 0), {}};
+  out.col.reserve(all.size());
+  for (size_t i = 0; i < n; ++i) {
+    const auto first = all.begin() + static_cast<std::ptrdiff_t>(bucket[i]),
+               last = all.begin() + static_cast<std::ptrdiff_t>(bucket[i + 1]);
+    std::sort(first, last);
+    out.col.insert(out.col.end(), first, std::unique(first, last));
+    if (out.col.size() > static_cast<size_t>(std::numeric_limits<Index>::max() / 9))
+      throw std::length_error("BlockSparseMatrix: more than 2^31 / 9 blocks");
+    out.row_begin[i + 1] = static_cast<Index>(out.col.size());
+  }
+  return out;
 }
 
 namespace {
@@ -29,18 +47,11 @@ std::atomic<std::uint64_t> last_pattern_version{0};
 
 BlockSparseMatrix::BlockSparseMatrix(const SparsityBuilder& builder)
     : pattern_version_(++last_pattern_version) {
-  const std::vector<std::pair<Index, Index>> pairs = builder.pairs();
-  // Scalar views index 9 values per block with Index.
-  if (pairs.size() > static_cast<size_t>(std::numeric_limits<Index>::max() / 9))
-    throw std::length_error("BlockSparseMatrix: more than 2^31 / 9 blocks");
-  row_begin_.assign(static_cast<size_t>(builder.num_nodes()) + 1, 0);
-  col_.resize(pairs.size());
-  for (size_t k = 0; k < pairs.size(); ++k) {
-    ++row_begin_[pairs[k].first + 1];
-    col_[k] = pairs[k].second;
-  }
-  for (Index i = 0; i < builder.num_nodes(); ++i) row_begin_[i + 1] += row_begin_[i];
-  values_.assign(9 * pairs.size(), 0.0);
+  // Scalar views index 9 values per block with Index (rows() refuses more).
+  SparsityBuilder::Rows rows = builder.rows();
+  row_begin_ = std::move(rows.row_begin);
+  col_ = std::move(rows.col);
+  values_.assign(9 * col_.size(), 0.0);
 }
 
 Index BlockSparseMatrix::block_index(Index i, Index j) const {

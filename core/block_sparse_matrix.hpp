@@ -18,8 +18,12 @@ class SparsityBuilder {
   /// Couples every pair of the given nodes (including each node with itself).
   void add_clique(std::span<const Index> nodes);
   Index num_nodes() const { return num_nodes_; }
-  /// Sorted, unique (row node, column node) pairs, diagonal pairs for every node included.
-  std::vector<std::pair<Index, Index>> pairs() const;
+  /// The coupled pairs by rows: row_begin (#nodes + 1 offsets into col) and, per row node, its
+  /// column nodes sorted and unique, the diagonal included.
+  struct Rows {
+    std::vector<Index> row_begin, col;
+  };
+  Rows rows() const;
 
  private:
   Index num_nodes_;

@@ -48,7 +48,40 @@ double lowest_eigenvalue_estimate(const BlockSparseMatrix& A, const VectorX& wei
   return T.eigenvalues()(0);
 }
 
+// The graph of the 3x3 blocks of M as a CHOLMOD pattern matrix with its upper triangle read
+// (stype 1; the full pattern is symmetric), freed with the common it was allocated with.
+auto block_graph(const BlockSparseMatrix& M, cholmod_common& c) {
+  const auto free_sparse = [&c](cholmod_sparse* S) { cholmod_free_sparse(&S, &c); };
+  const Index nodes = M.num_nodes();
+  std::unique_ptr<cholmod_sparse, decltype(free_sparse)> G(
+      cholmod_allocate_sparse(nodes, nodes, M.num_blocks(), 1, 1, 1, CHOLMOD_PATTERN, &c),
+      free_sparse);
+  if (!G) throw std::runtime_error("CHOLMOD allocation failed");
+  for (Index i = 0; i <= nodes; ++i) static_cast<int*>(G->p)[i] = M.row_begin(i);
+  for (Index k = 0; k < M.num_blocks(); ++k) static_cast<int*>(G->i)[k] = M.block_col(k);
+  return G;
+}
+
 }  // namespace
+
+double predicted_factor_flops(const BlockSparseMatrix& A) {
+  cholmod_common c;
+  cholmod_start(&c);
+  c.print = 0;
+  c.nmethods = 1;
+  c.method[0].ordering = CHOLMOD_AMD;
+  c.supernodal = CHOLMOD_SIMPLICIAL;  // column counts only
+  double flops = -1;
+  {
+    const auto G = block_graph(A, c);
+    cholmod_factor* L = cholmod_analyze(G.get(), &c);
+    if (L) flops = 27 * c.fl;
+    cholmod_free_factor(&L, &c);
+  }
+  cholmod_finish(&c);
+  if (!(flops >= 0)) throw std::runtime_error("CHOLMOD analysis of the block graph failed");
+  return flops;
+}
 
 struct DirectSolver::Impl {
   DirectSolverOptions options;
@@ -136,15 +169,7 @@ void DirectSolver::Impl::analyse(const BlockSparseMatrix& M) {
     diagonal[j] =
         std::find(row + pattern.row_begin[j], row + pattern.row_begin[j + 1], Index(j)) - row;
   }
-  // The block graph with its upper triangle read (stype 1); the full pattern is symmetric.
-  const Index nodes = M.num_nodes();
-  const auto free_sparse = [this](cholmod_sparse* S) { cholmod_free_sparse(&S, &c); };
-  const std::unique_ptr<cholmod_sparse, decltype(free_sparse)> G(
-      cholmod_allocate_sparse(nodes, nodes, M.num_blocks(), 1, 1, 1, CHOLMOD_PATTERN, &c),
-      free_sparse);
-  check("allocate");
-  for (Index i = 0; i <= nodes; ++i) static_cast<int*>(G->p)[i] = M.row_begin(i);
-  for (Index k = 0; k < M.num_blocks(); ++k) static_cast<int*>(G->i)[k] = M.block_col(k);
+  const auto G = block_graph(M, c);
   const auto try_ordering = [&](DirectOrdering o) {
     perm = node_ordering(G.get(), o);
     llt = analyse_with(CHOLMOD_SUPERNODAL);

@@ -37,6 +37,14 @@ struct DirectAnalysis {
   double factor_entries = 0;                       ///< nonzeros of L
 };
 
+/// The flops of an LL^T factorisation of A predicted from the graph of its 3x3 blocks alone: an
+/// AMD ordering and CHOLMOD's column counts of that graph, nine times smaller than the scalar
+/// pattern, and no supernodal analysis. A block column of L with c blocks is three scalar
+/// columns of about 3c entries, so the scalar flops are about 27 times the block graph's (a
+/// slight overestimate, and with AMD where DirectSolver::analyse may find METIS better). This
+/// is what LinearSolver's auto compares, before the direct solver is needed.
+double predicted_factor_flops(const BlockSparseMatrix& A);
+
 /// What one direct solve did.
 struct DirectSolveStats {
   bool success = false;   ///< x is finite and solves A x = b (or (A + s I) x = b)

@@ -42,9 +42,8 @@ LinearSolveStats LinearSolver::solve(const BlockSparseMatrix& A, const VectorX& 
   switch (options_.kind) {
     case LinearSolverKind::kAuto:
       if (choice_ == Choice::kUndecided) {
-        if (!direct_) direct_ = std::make_unique<DirectSolver>(options_.direct);
         const double entries = (9.0 * A.num_blocks() + 3.0 * A.num_nodes()) / 2;
-        choice_ = direct_->analyse(A).flops > options_.auto_flops_per_entry * entries
+        choice_ = predicted_factor_flops(A) > options_.auto_flops_per_entry * entries
                       ? Choice::kAmg
                       : Choice::kDirect;
       }

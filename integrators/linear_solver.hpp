@@ -47,11 +47,12 @@ struct LinearSolveStats {
 };
 
 /// Solves A x = b with the chosen method (see DirectSolver and AmgSolver). kAuto decides on the
-/// first matrix: the direct solver's symbolic analysis predicts the flops F of a factorisation,
-/// which grow with the separators of the mesh (a slender bar factors in few flops per entry, a
-/// bulky block in many); a cycle of AMG-CG costs a fixed amount per matrix entry. F above
-/// auto_flops_per_entry times the entries of the lower triangle chooses AMG-CG, and PETSc is
-/// started only then. A matrix that AMG-CG fails on (indefinite) is solved directly.
+/// first matrix: the graph of its 3x3 blocks predicts the flops F of a factorisation
+/// (predicted_factor_flops), which grow with the separators of the mesh (a slender bar factors
+/// in few flops per entry, a bulky block in many); a cycle of AMG-CG costs a fixed amount per
+/// matrix entry. F above auto_flops_per_entry times the entries of the lower triangle chooses
+/// AMG-CG, and PETSc is started only then; otherwise the direct solver analyses the pattern.
+/// A matrix that AMG-CG fails on (indefinite) is solved directly.
 class LinearSolver {
  public:
   explicit LinearSolver(LinearSolverOptions options = {});
