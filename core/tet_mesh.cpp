@@ -5,6 +5,7 @@
 #include <cmath>
 #include <vector>
 
+#include "core/boundary.hpp"
 #include "core/error.hpp"
 
 namespace depthfem {
@@ -31,35 +32,21 @@ std::string element_at(const MeshSource& source, Index t) {
   return "element " + std::to_string(t) + (line > 0 ? " (line " + std::to_string(line) + ")" : "");
 }
 
-// A face of a positively oriented tet: its sorted nodes and whether its outward orientation is an
-// odd permutation of them. Two tets on opposite sides of a face see it with opposite parity.
-struct OrientedFace {
-  std::array<Index, 3> sorted;
-  bool odd;
-  Index tet;
-};
+// Whether face `local` of tet t, oriented outward, is an odd permutation of its sorted nodes.
+// Two tets on opposite sides of a face see it with opposite parity.
+bool odd(const TetIndices& tets, Index t, int local) {
+  const Index a = tets(t, kTetFace[local][0]), b = tets(t, kTetFace[local][1]),
+              c = tets(t, kTetFace[local][2]);
+  return ((a > b) + (a > c) + (b > c)) % 2 == 1;
+}
 
 // Every face belongs to one tet (boundary) or two on opposite sides of it (interior). A tet listed
 // twice, or two tets folded over each other, see a face with the same orientation; a third tet on
 // a face overlaps one of the other two.
 void check_faces(const TetIndices& tets, const MeshSource& source) {
-  // Face k of tet (0,1,2,3) is opposite vertex k, its right-hand normal pointing outward.
-  static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-  std::vector<OrientedFace> faces;
-  faces.reserve(4 * static_cast<size_t>(tets.rows()));
-  for (Index t = 0; t < tets.rows(); ++t) {
-    for (const auto& f : kFace) {
-      const Index a = tets(t, f[0]), b = tets(t, f[1]), c = tets(t, f[2]);
-      std::array<Index, 3> sorted = {a, b, c};
-      std::sort(sorted.begin(), sorted.end());
-      faces.push_back({sorted, ((a > b) + (a > c) + (b > c)) % 2 == 1, t});
-    }
-  }
-  std::sort(faces.begin(), faces.end(), [](const OrientedFace& x, const OrientedFace& y) {
-    return x.sorted != y.sorted ? x.sorted < y.sorted : x.tet < y.tet;
-  });
+  const std::vector<TetFace> faces = face_table(tets);
   for (size_t i = 0; i + 1 < faces.size(); ++i) {
-    const OrientedFace &f = faces[i], &g = faces[i + 1];
+    const TetFace &f = faces[i], &g = faces[i + 1];
     if (f.sorted != g.sorted) continue;
     const auto fail = [&](const std::string& what) {
       throw InputError(located(source.file, line_of(source.tet_line, g.tet),
@@ -73,7 +60,7 @@ void check_faces(const TetIndices& tets, const MeshSource& source) {
                       ") belongs to three or more elements: " + element_at(source, f.tet) + ", " +
                       element_at(source, g.tet) + ", " + element_at(source, faces[i + 2].tet)));
     }
-    if (f.odd != g.odd) continue;
+    if (odd(tets, f.tet, f.local) != odd(tets, g.tet, g.local)) continue;
     std::array<Index, 4> x, y;
     for (int k = 0; k < 4; ++k) x[k] = tets(f.tet, k), y[k] = tets(g.tet, k);
     std::sort(x.begin(), x.end());

@@ -13,7 +13,7 @@ grep -q "^step    0" "$tmp/ok.log" || fail "no progress line"
 grep -q "= linear solve" "$tmp/ok.log" || fail "no timing table"
 "$exe" info "$tmp/ok.h5" > "$tmp/info.log" || fail "info exited $?"
 grep -q "status: completed" "$tmp/info.log" || fail "info does not report completion"
-[ -f "$tmp/ok.xmf" ] || fail "no XDMF sidecar"
+[ -f "$tmp/ok.xmf" ] && [ -f "$tmp/ok.xdmf2" ] || fail "no XDMF sidecars"
 
 "$exe" run "$src/apps/scenes/uniaxial_block.json" --out "$tmp/bad.h5" --set boundary.3.offset=-1.5 \
   --set solver.min_increment=0.01 > /dev/null 2> "$tmp/err.log"
