@@ -499,6 +499,7 @@ void read_solver(JsonObject s, Scene& scene) {
         s.integer("linear_max_iterations", lin.max_iterations);
   o.newton.max_iterations = s.integer("max_newton_iterations", o.newton.max_iterations);
   o.newton.max_line_search = s.integer("max_line_search", o.newton.max_line_search);
+  o.newton.forcing_max = s.number("forcing_max", o.newton.forcing_max);
   o.newton.line_search = s.choice<LineSearchRule>(
       "line_search", "rule",
       {{"energy", LineSearchRule::kEnergy}, {"residual", LineSearchRule::kResidual}});
@@ -522,6 +523,8 @@ void read_solver(JsonObject s, Scene& scene) {
   if (lin.max_iterations < 1) s.fail("linear_max_iterations", "must be >= 1");
   if (o.newton.max_iterations < 1) s.fail("max_newton_iterations", "must be >= 1");
   if (o.newton.max_line_search < 0) s.fail("max_line_search", "must be >= 0");
+  if (!(o.newton.forcing_max >= 0 && o.newton.forcing_max < 1))
+    s.fail("forcing_max", "must be in [0, 1)");
   if (o.newton.linear.max_iterations < 1) s.fail("linear_max_iterations", "must be >= 1");
   if (o.max_settle_steps < 0) s.fail("max_settle_steps", "must be >= 0");
   if (scene.quasi_viscosity < 0) s.fail("quasi_viscosity", "must be >= 0");

@@ -128,7 +128,8 @@ struct DirectSolver::Impl {
   bool factorize(cholmod_factor* L, double s);
   bool factorize_shifted(const VectorX& d, const VectorX& weight, double s);
   void solve_with(cholmod_factor* L, const VectorX& b, VectorX& x);
-  bool reuse(const BlockSparseMatrix& M, const VectorX& b, VectorX& x, int& iterations);
+  bool reuse(const BlockSparseMatrix& M, const VectorX& b, VectorX& x, double tolerance,
+             int& iterations);
 };
 
 // Orders the graph G of the 3x3 blocks (nine times fewer edges than the scalar graph) and
@@ -236,7 +237,7 @@ const DirectAnalysis& DirectSolver::analyse(const BlockSparseMatrix& M) {
 
 // Conjugate gradients preconditioned by the kept factor; false when they fall short.
 bool DirectSolver::Impl::reuse(const BlockSparseMatrix& M, const VectorX& b, VectorX& x,
-                               int& iterations) {
+                               double tolerance, int& iterations) {
   const int cap =
       static_cast<int>(std::clamp(analysis.flops / (40 * analysis.factor_entries), 2.0, 50.0));
   x.setZero(b.size());
@@ -252,10 +253,9 @@ bool DirectSolver::Impl::reuse(const BlockSparseMatrix& M, const VectorX& b, Vec
     x += alpha * p;
     r -= alpha * Ap;
     const double reduction = r.norm() / b.norm();
-    if (reduction <= options.reuse_tolerance) return true;
+    if (reduction <= tolerance) return true;
     // Give up as soon as the reduction so far, extrapolated at its mean rate, misses the cap.
-    if (iterations >= 2 &&
-        iterations * std::log(options.reuse_tolerance) / std::log(reduction) > cap)
+    if (iterations >= 2 && iterations * std::log(tolerance) / std::log(reduction) > cap)
       return false;
     solve_with(llt, r, z);
     const double rz_next = r.dot(z);
@@ -266,7 +266,8 @@ bool DirectSolver::Impl::reuse(const BlockSparseMatrix& M, const VectorX& b, Vec
   return false;
 }
 
-DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& b, VectorX& x) {
+DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& b, VectorX& x,
+                                     double tolerance) {
   Impl& s = *impl_;
   analyse(M);
   DirectSolveStats stats;
@@ -275,7 +276,9 @@ DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& 
     stats.success = true;
     return stats;
   }
-  if (s.llt_valid && s.options.reuse_tolerance > 0 && s.reuse(M, b, x, stats.cg_iterations)) {
+  if (s.llt_valid && s.options.reuse_tolerance > 0 &&
+      s.reuse(M, b, x, tolerance > 0 ? tolerance : s.options.reuse_tolerance,
+              stats.cg_iterations)) {
     stats.success = x.allFinite();
     return stats;
   }

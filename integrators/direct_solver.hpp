@@ -73,8 +73,10 @@ class DirectSolver {
 
   /// Orders and analyses the pattern of A unless it was already (the solve then reuses it).
   const DirectAnalysis& analyse(const BlockSparseMatrix& A);
-  /// x = A^-1 b (or (A + s diag|A|)^-1 b, see DirectSolveStats::shift).
-  DirectSolveStats solve(const BlockSparseMatrix& A, const VectorX& b, VectorX& x);
+  /// x = A^-1 b (or (A + s diag|A|)^-1 b, see DirectSolveStats::shift). CG on a kept factor
+  /// stops at |b - A x| <= tolerance |b| (0: the options' reuse_tolerance).
+  DirectSolveStats solve(const BlockSparseMatrix& A, const VectorX& b, VectorX& x,
+                         double tolerance = 0);
 
  private:
   struct Impl;

@@ -36,7 +36,7 @@ VectorX inverse_diagonal(const BlockSparseMatrix& A) {
 LinearSolver::LinearSolver(LinearSolverOptions options) : options_(options) {}
 
 LinearSolveStats LinearSolver::solve(const BlockSparseMatrix& A, const VectorX& b, VectorX& x,
-                                     const Points* positions) {
+                                     const Points* positions, double tolerance) {
   x.setZero(b.size());
   if (b.norm() == 0) return {0, 0.0, true};
   switch (options_.kind) {
@@ -47,7 +47,7 @@ LinearSolveStats LinearSolver::solve(const BlockSparseMatrix& A, const VectorX& 
                       ? Choice::kAmg
                       : Choice::kDirect;
       }
-      return choice_ == Choice::kAmg ? amg(A, b, x, positions) : direct(A, b, x);
+      return choice_ == Choice::kAmg ? amg(A, b, x, positions) : direct(A, b, x, tolerance);
     case LinearSolverKind::kAmg:
       return amg(A, b, x, positions);
     case LinearSolverKind::kGmres:
@@ -55,7 +55,7 @@ LinearSolveStats LinearSolver::solve(const BlockSparseMatrix& A, const VectorX& 
     case LinearSolverKind::kCg:
       return cg(A, b, x);
     case LinearSolverKind::kDirect:
-      return direct(A, b, x);
+      return direct(A, b, x, tolerance);
   }
   return {};
 }
@@ -153,9 +153,10 @@ LinearSolveStats LinearSolver::cg(const BlockSparseMatrix& A, const VectorX& b, 
 }
 
 // Iterations: one per factorisation plus the CG iterations on a kept factor.
-LinearSolveStats LinearSolver::direct(const BlockSparseMatrix& A, const VectorX& b, VectorX& x) {
+LinearSolveStats LinearSolver::direct(const BlockSparseMatrix& A, const VectorX& b, VectorX& x,
+                                      double tolerance) {
   if (!direct_) direct_ = std::make_unique<DirectSolver>(options_.direct);
-  const DirectSolveStats d = direct_->solve(A, b, x);
+  const DirectSolveStats d = direct_->solve(A, b, x, tolerance);
   const int iterations = (d.factored ? 1 : 0) + d.cg_iterations;
   if (!d.success) return {iterations, 1.0, false, d.shift};
   VectorX Ax;
@@ -170,7 +171,7 @@ LinearSolveStats LinearSolver::amg(const BlockSparseMatrix& A, const VectorX& b,
   if (!amg_) amg_ = std::make_unique<AmgSolver>(options_.amg);
   const AmgSolveStats s = amg_->solve(A, b, x, positions);
   if (!s.converged || !x.allFinite()) {
-    LinearSolveStats d = direct(A, b, x);
+    LinearSolveStats d = direct(A, b, x, 0);
     d.iterations += s.iterations;
     return d;
   }

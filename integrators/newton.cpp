@@ -85,6 +85,7 @@ NewtonResult NewtonSolver::solve(Points& x) {
   constraints_.project(g);
   double residual = g.norm();
   result.residuals.push_back(residual);
+  double forcing = 0;  // the first step as exact as the solver makes it
   for (;;) {
     result.energy = energy;
     // A non-finite residual (overflowing forces) never counts as converged.
@@ -105,7 +106,7 @@ NewtonResult NewtonSolver::solve(Points& x) {
     LinearSolveStats stats;
     {
       PhaseTimers::Scope t(system_.timers(), "linear solve");
-      stats = linear_.solve(H, -g, dx, &x);
+      stats = linear_.solve(H, -g, dx, &x, forcing);
     }
     // An iterative solve is exact on the constrained directions only up to its tolerance (a
     // multigrid preconditioner couples them with the free ones); keep the step free of them.
@@ -134,8 +135,13 @@ NewtonResult NewtonSolver::solve(Points& x) {
     }
     energy = system_.hessian(x, g);
     constraints_.project(g);
+    const double ratio = g.norm() / residual;
     residual = g.norm();
     result.residuals.push_back(residual);
+    // Eisenstat and Walker's choice 2 (gamma 0.9, alpha 2) with their safeguard.
+    const double safeguard = 0.9 * forcing * forcing;
+    forcing = std::min(options_.forcing_max,
+                       std::max(0.9 * ratio * ratio, safeguard > 0.1 ? safeguard : 0.0));
   }
 }
 

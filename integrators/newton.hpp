@@ -28,6 +28,15 @@ struct NewtonOptions {
   VectorX force_scale;
   /// Step halvings before the line search gives up.
   int max_line_search = 30;
+  /// Inexact Newton: the linear solve of step k may stop at |b - A dx| <= eta_k |b|, with
+  /// Eisenstat and Walker's second choice eta_k = 0.9 (r_k / r_(k-1))^2 (r: the residual norm;
+  /// raised to 0.9 eta_(k-1)^2 where that is above 0.1), at most forcing_max; the first step is
+  /// solved to the solver's own tolerance. Far from the solution, where the residual does not
+  /// fall, a solve to a tenth is enough; as Newton converges, eta_k falls with the square of
+  /// the residual's ratio, and Newton stays quadratic. Only the direct solver's CG on a kept
+  /// factor takes it (LinearSolver::solve): there it saves factorisations. 0: every solve to
+  /// the solver's own tolerance.
+  double forcing_max = 0.1;
   LinearSolverOptions linear;
 };
 
