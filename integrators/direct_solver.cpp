@@ -2,6 +2,8 @@
 
 #include <cholmod.h>
 
+#include "integrators/thread_budget.hpp"
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -202,6 +204,7 @@ void DirectSolver::Impl::analyse(const BlockSparseMatrix& M) {
 // Factors A + s I into L; false when it is not positive definite (LL^T) or has a zero pivot.
 bool DirectSolver::Impl::factorize(cholmod_factor* L, double s) {
   double beta[2] = {s, 0};
+  const SerialBlas serial(analysis.flops < options.threaded_factor_flops);
   cholmod_factorize_p(A, beta, nullptr, 0, L, &c);
   check("factorization");
   return L->minor == L->n;
@@ -222,6 +225,7 @@ void DirectSolver::Impl::solve_with(cholmod_factor* L, const VectorX& b, VectorX
   B.x = const_cast<double*>(b.data());
   B.xtype = CHOLMOD_REAL;
   B.dtype = CHOLMOD_DOUBLE;
+  const SerialBlas serial;
   cholmod_solve2(CHOLMOD_A, L, &B, nullptr, &X, nullptr, &Y, &E, &c);
   check("solve");
   x = Eigen::Map<const VectorX>(static_cast<const double*>(X->x), b.size());

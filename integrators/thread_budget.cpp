@@ -43,4 +43,21 @@ ThreadBudget::ThreadBudget(int threads)
 
 ThreadBudget::~ThreadBudget() = default;
 
+SerialBlas::SerialBlas(bool serial) {
+  // Looked up once: dlsym over every library the process loaded (PETSc brings a hundred) costs
+  // tenths of a millisecond, and the direct solver asks twice per triangular solve.
+  static const auto get = openblas<int (*)()>("openblas_get_num_threads");
+  threads_ = serial && get ? get() : 1;
+  if (threads_ > 1) set_threads(1);
+}
+
+SerialBlas::~SerialBlas() {
+  if (threads_ > 1) set_threads(threads_);
+}
+
+void SerialBlas::set_threads(int threads) {
+  static const auto set = openblas<void (*)(int)>("openblas_set_num_threads");
+  set(threads);
+}
+
 }  // namespace depthfem

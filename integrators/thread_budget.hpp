@@ -31,4 +31,21 @@ class ThreadBudget {
   std::unique_ptr<tbb::global_control> tbb_;
 };
 
+/// While alive (and `serial`), BLAS runs on the calling thread (OpenBLAS; with another BLAS,
+/// nothing changes). The direct solver's triangular solves and small factorisations call BLAS
+/// on blocks too small to share: the pool's threads, woken for each call and put to sleep after
+/// it, cost more in the kernel than they save (the 80 x 8 x 8 sag bar at two threads: linear
+/// solve 2.7 s, 1.5 s of it system time, against 1.5-1.7 s with this around them).
+class SerialBlas {
+ public:
+  explicit SerialBlas(bool serial = true);
+  ~SerialBlas();
+  SerialBlas(const SerialBlas&) = delete;
+  SerialBlas& operator=(const SerialBlas&) = delete;
+
+ private:
+  static void set_threads(int threads);
+  int threads_;
+};
+
 }  // namespace depthfem
