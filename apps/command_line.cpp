@@ -79,7 +79,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   print_timing(r.timers, r.seconds, out);
   if (!r.success) {
     err << "depthfem: error: "
-        << one_line(r.message + " (" + std::to_string(r.steps.size()) +
+        << one_line(scene_path + ": " + r.message + " (" + std::to_string(r.steps.size()) +
                     " completed steps kept in " + options.out + ")")
         << "\n";
     return 1;

@@ -137,10 +137,11 @@ LoadedMesh make_mesh(const MeshSpec& spec, const JsonObject& m) {
 MaterialModel read_material(JsonObject m, Vec3& fiber_direction) {
   const std::string model = m.string("model");
   MaterialModel out;
-  // Young's modulus and Poisson's ratio are converted by the model; its range errors are
-  // reported at the key.
+  // Young's modulus and Poisson's ratio are converted by the model; range errors are reported
+  // at the key they concern.
   const auto elastic_constants = [&](auto convert) {
     const double E = m.number("youngs"), nu = m.number("poisson");
+    if (!(nu > -1 && nu < 0.5)) m.fail("poisson", "Poisson's ratio must be in (-1, 0.5)");
     try {
       return convert(E, nu);
     } catch (const std::invalid_argument& e) {
@@ -613,7 +614,7 @@ void check_sizes(JsonObject& r, const MeshCounts& counts) {
 
 // A Newton test that is infinite would call any residual converged, one that underflows to
 // zero none: both come from extreme moduli, mesh sizes or tolerances. Residual norms square
-// forces of order E h^2, so E^2 must be finite too.
+// forces of order E h^2, so E^2 and (E h^2)^2 must be finite and normal too.
 void check_newton_tolerance(JsonObject& r, const Scene& scene,
                             const std::vector<std::string>& material_paths) {
   NewtonOptions newton;
@@ -624,14 +625,18 @@ void check_newton_tolerance(JsonObject& r, const Scene& scene,
     const double Eg = material_moduli(scene.groups[g].material).youngs();
     if (!(Eg <= E)) E = Eg, stiffest = g;
   }
-  const bool scale_ok = newton.force_scale.allFinite() && (newton.force_scale.array() > 0).all();
+  // A scale whose square is subnormal (E = 1e-320 Pa) keeps a few digits, or none.
+  const auto normal_square = [](double v) { return v > 0 && std::isnormal(v * v); };
+  const bool scale_ok =
+      std::all_of(newton.force_scale.begin(), newton.force_scale.end(), normal_square) &&
+      normal_square(E);
   const double tolerance = newton.tolerance;
-  if (std::isfinite(tolerance) && tolerance > 0 && scale_ok && std::isfinite(E * E)) return;
+  if (std::isfinite(tolerance) && tolerance > 0 && scale_ok) return;
   const std::string why =
       "the Newton test (residual / E h^2 against tolerance x sqrt(#dofs) = " +
-      number_text(tolerance) + ") is not finite and positive (E = " + number_text(E) +
+      number_text(tolerance) + ") is not a finite, normal positive number (E = " + number_text(E) +
       " Pa, mean edge h = " + number_text(mean_edge_length(scene.mesh.X, scene.mesh.tets)) + " m)";
-  if (!scale_ok || !std::isfinite(E * E) || scene.groups.empty())
+  if (!scale_ok || scene.groups.empty())
     r.fail(scene.groups.empty() ? "bodies" : material_paths[stiffest], why);
   r.fail("solver.tolerance", why);
 }

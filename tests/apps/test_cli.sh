@@ -20,7 +20,7 @@ grep -q "status: completed" "$tmp/info.log" || fail "info does not report comple
 rc=$?
 [ $rc -eq 1 ] || fail "failed run exited $rc, expected 1"
 [ "$(wc -l < "$tmp/err.log")" -eq 1 ] || fail "expected one error line, got: $(cat "$tmp/err.log")"
-grep -q "^depthfem: error: load increment fell below min_increment" "$tmp/err.log" || fail "error line: $(cat "$tmp/err.log")"
+grep -q "^depthfem: error: $src/apps/scenes/uniaxial_block.json: load increment fell below min_increment" "$tmp/err.log" || fail "error line: $(cat "$tmp/err.log")"
 "$exe" info "$tmp/bad.h5" > "$tmp/info2.log" || fail "info on the failed run exited $?"
 grep -q "status: failed" "$tmp/info2.log" || fail "failed run not marked failed"
 grep -Eq "steps: [1-9]" "$tmp/info2.log" || fail "failed run kept no steps"

@@ -1,0 +1,374 @@
+#!/usr/bin/python3
+"""Runs depthfem on hand-made bad inputs and sorts what happens to each.
+
+    /usr/bin/python3 apps/tools/bad_inputs.py DEPTHFEM [--csv OUT.csv]
+
+Every case is one `depthfem` command on a scene, a mesh file or a command line that is wrong in
+one way (the classes of the README's reliability table). Outcomes:
+  clean      exit 1 (2 for command-line usage), the first line of stderr is
+             "depthfem: error: ..." and names where: the scene file, the mesh file and line, or
+             the option; with exit 1 that is the only line
+  unlocated  an error, but the line names neither the file nor the option
+  accepted   exit 0: a bad input run as if it were good (a silent wrong result)
+  crash      killed by a signal or another exit status
+  hang       still running after 30 s
+Control cases (the base scene with a generated mesh, Gmsh and TetGen files, a tet given in the
+other orientation, which the readers turn) must run and exit 0,
+so the harness cannot call everything clean by rejecting everything. Prints a table per class;
+exits 1 if any bad case is not clean or a control fails.
+"""
+import argparse
+import csv
+import json
+import os
+import pathlib
+import subprocess
+import sys
+import tempfile
+import time
+
+BASE = {
+    "name": "base",
+    "analysis": "static",
+    "bodies": [{
+        "name": "block",
+        "mesh": {"generator": "box", "lo": [0, 0, 0], "hi": [1, 1, 1], "cells": [2, 2, 2]},
+        "material": {"model": "mooney_rivlin", "C1": 4000, "C2": 1000, "a": 20000},
+    }],
+    "boundary": [
+        {"type": "fixed", "nodes": {"plane": {"normal": [1, 0, 0], "offset": 0}}},
+        {"type": "displaced", "displacement": [0.1, 0, 0],
+         "nodes": {"plane": {"normal": [1, 0, 0], "offset": 1}}},
+    ],
+    "solver": {"linear_solver": "direct", "initial_increment": 0.5},
+}
+
+CORNERS = [(x, y, z) for z in (0, 1) for y in (0, 1) for x in (0, 1)]  # node i+1: bits x, y, z
+KUHN = [(0, 1, 3, 7), (0, 1, 5, 7), (0, 2, 3, 7), (0, 2, 6, 7), (0, 4, 5, 7), (0, 4, 6, 7)]
+
+
+def positive(tet):
+    """The Kuhn tet with its last two corners swapped where its volume is negative."""
+    p = [CORNERS[i] for i in tet]
+    a, b, c = ([p[k][j] - p[0][j] for j in range(3)] for k in (1, 2, 3))
+    det = (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+           + a[2] * (b[0] * c[1] - b[1] * c[0]))
+    return tet if det > 0 else (tet[0], tet[1], tet[3], tet[2])
+
+
+TETS = [tuple(i + 1 for i in positive(t)) for t in KUHN]
+NODES = [f"{i + 1} {x} {y} {z}" for i, (x, y, z) in enumerate(CORNERS)]
+
+
+def msh(nodes=None, tets=None, header="2.2 0 8", node_count=None, elem_count=None, tail=True):
+    """A Gmsh 2.2 unit cube (8 nodes, 6 tets) with the given parts replaced."""
+    nodes = NODES if nodes is None else nodes
+    tets = TETS if tets is None else tets
+    lines = ["$MeshFormat", header, "$EndMeshFormat", "$Nodes",
+             str(len(nodes) if node_count is None else node_count), *nodes, "$EndNodes",
+             "$Elements", str(len(tets) if elem_count is None else elem_count)]
+    lines += [f"{k + 1} 4 2 1 1 " + " ".join(map(str, t)) for k, t in enumerate(tets)]
+    if tail:
+        lines.append("$EndElements")
+    return "\n".join(lines) + "\n"
+
+
+def tetgen(nodes=None, tets=None):
+    nodes = NODES if nodes is None else nodes
+    tets = TETS if tets is None else tets
+    node = f"{len(nodes)} 3 0 0\n" + "\n".join(nodes) + "\n"
+    ele = f"{len(tets)} 4 0\n" + "\n".join(
+        f"{k + 1} " + " ".join(map(str, t)) for k, t in enumerate(tets)) + "\n"
+    return node, ele
+
+
+def scene(edit=None, mesh_file=None):
+    s = json.loads(json.dumps(BASE))
+    if mesh_file:
+        s["bodies"][0]["mesh"] = {"file": mesh_file}
+    if edit:
+        edit(s)
+    return json.dumps(s, indent=1)
+
+
+def setter(path, value):
+    """An edit that sets the key path (a list of keys and indices) to value."""
+    def edit(s):
+        node = s
+        for key in path[:-1]:
+            node = node[key]
+        node[path[-1]] = value
+    return edit
+
+
+def removal(path):
+    def edit(s):
+        node = s
+        for key in path[:-1]:
+            node = node[key]
+        del node[path[-1]]
+    return edit
+
+
+def cases():
+    """(class, name, files {name: text}, arguments after 'depthfem', where-tokens, control)."""
+    run = ["run", "scene.json", "--out", "out.h5"]
+    where = ["scene.json"]
+    out = []
+
+    def add(cls, name, files, args=None, names=None, control=False):
+        out.append((cls, name, files, args or run, names or where, control))
+
+    # Controls.
+    add("control", "base scene, generated mesh", {"scene.json": scene()}, control=True)
+    add("control", "base scene, Gmsh file", {"scene.json": scene(mesh_file="m.msh"),
+                                             "m.msh": msh()}, control=True)
+    node, ele = tetgen()
+    add("control", "a tet in the other orientation (reoriented)",
+        {"scene.json": scene(mesh_file="m.msh"),
+         "m.msh": msh(tets=[(TETS[0][0], TETS[0][1], TETS[0][3], TETS[0][2])] + TETS[1:])},
+        control=True)
+    add("control", "base scene, TetGen files", {"scene.json": scene(mesh_file="m.ele"),
+                                                "m.node": node, "m.ele": ele}, control=True)
+
+    # Sizes and counts.
+    cells = ["bodies", 0, "mesh", "cells"]
+    for name, value in [("zero cells", [0, 2, 2]), ("negative cells", [-1, 2, 2]),
+                        ("cells 2^32+40", [2**32 + 40, 1, 1]), ("cells 2^63", [2**63, 1, 1]),
+                        ("cell product overflows int", [100000, 100000, 100000]),
+                        ("cells beyond memory", [3000, 3000, 3000]),
+                        ("fractional cells", [1.5, 2, 2]), ("cells as strings", ["2", 2, 2]),
+                        ("two cell counts", [2, 2]), ("cells null", None)]:
+        add("sizes and counts", name, {"scene.json": scene(setter(cells, value))})
+    solver = ["solver"]
+    for key, value in [("max_newton_iterations", 2**32 + 1), ("max_newton_iterations", 0),
+                       ("max_newton_iterations", -1), ("initial_increment", 0),
+                       ("initial_increment", -0.5), ("initial_increment", 2),
+                       ("min_increment", -1), ("tolerance", -1), ("tolerance", 1e308),
+                       ("tolerance", 0), ("linear_max_iterations", -5),
+                       ("linear_tolerance", 0), ("forcing_max", 1)]:
+        add("sizes and counts", f"solver.{key} {value}",
+            {"scene.json": scene(setter(solver + [key], value))})
+    for duration, step in [(1000, 1e-9), (1, 0), (1, -0.01), (-1, 0.01), (0, 0.01)]:
+        def dynamic(s, duration=duration, step=step):
+            s["analysis"] = "dynamic"
+            s["dynamic"] = {"integrator": "implicit_euler", "time_step": step,
+                            "duration": duration}
+        add("sizes and counts", f"dynamic duration {duration} step {step}",
+            {"scene.json": scene(dynamic)})
+
+    # Materials and numbers that make the arithmetic non-finite.
+    material = ["bodies", 0, "material"]
+    nh = lambda e, nu: setter(material, {"model": "neo_hookean", "youngs": e, "poisson": nu})
+    for name, edit in [("youngs 1e300", nh(1e300, 0.3)), ("youngs 1e308", nh(1e308, 0.3)),
+                       ("youngs 0", nh(0, 0.3)), ("youngs negative", nh(-1e6, 0.3)),
+                       ("poisson 0.5", nh(1e6, 0.5)), ("poisson -1", nh(1e6, -1)),
+                       ("poisson 0.7", nh(1e6, 0.7)), ("youngs 1e-320", nh(1e-320, 0.3)),
+                       ("C1 negative", setter(material + ["C1"], -4000)),
+                       ("a making the bulk modulus negative", setter(material + ["a"], -1e5)),
+                       ("a 1e400 (infinite)", setter(material + ["a"], 1e400)),
+                       ("density negative", setter(["bodies", 0, "density"], -1)),
+                       ("density 1e309", setter(["bodies", 0, "density"], 1e309)),
+                       ("unknown model", setter(material + ["model"], "rubber")),
+                       ("box hi = lo", setter(["bodies", 0, "mesh", "hi"], [0, 0, 0])),
+                       ("box hi below lo", setter(["bodies", 0, "mesh", "hi"], [-1, 1, 1])),
+                       ("gravity infinite", setter(["gravity"], [0, 0, 1e400])),
+                       ("displacement 1e300", setter(["boundary", 1, "displacement"],
+                                                     [1e300, 0, 0]))]:
+        add("non-finite arithmetic and bad numbers", name, {"scene.json": scene(edit)})
+
+    # JSON.
+    valid = scene()
+    for name, text in [("empty file", ""), ("truncated", valid[:len(valid) // 2]),
+                       ("trailing comma", valid.replace('"static",', '"static",,')),
+                       ("top level an array", "[" + valid + "]"),
+                       ("100,000 levels of nesting",
+                        valid[:-1] + ', "x": ' + "[" * 100000 + "]" * 100000 + "}"),
+                       ("65 levels of nesting",
+                        valid[:-1] + ', "x": ' + "[" * 65 + "]" * 65 + "}"),
+                       ("20 MiB of whitespace", valid + " " * (20 << 20)),
+                       ("duplicate key", valid.replace('"name": "base",',
+                                                       '"name": "base", "name": "again",')),
+                       ("binary garbage", "\x00\xff\xfe{" * 100),
+                       ("control character in a key", valid.replace('"name": "base"',
+                                                                    '"na\\u0001me": "base"')),
+                       ("unknown key", valid.replace('"name": "base"',
+                                                     '"name": "base", "gravty": [0, 0, -9.8]')),
+                       ("number where a string goes", valid.replace('"static"', "7")),
+                       ("no bodies", scene(removal(["bodies"]))),
+                       ("empty bodies", scene(setter(["bodies"], []))),
+                       ("unterminated string", valid.replace('"base"', '"base')),
+                       ("comment", "// a scene\n" + valid)]:
+        add("JSON", name, {"scene.json": text})
+
+    # Boundary conditions and node sets.
+    for name, edit in [("plane matching no node",
+                        setter(["boundary", 0, "nodes", "plane", "offset"], 7)),
+                       ("unknown node set", setter(["boundary", 0, "nodes"], {"set": "nope"})),
+                       ("unknown body", setter(["boundary", 0, "nodes"], {"body": "nope"})),
+                       ("node list out of range", setter(["boundary", 0, "nodes"],
+                                                         {"list": [0, 1, 99999]})),
+                       ("node list 2^40", setter(["boundary", 0, "nodes"], {"list": [2**40]})),
+                       ("zero normal", setter(["boundary", 0, "nodes", "plane", "normal"],
+                                              [0, 0, 0])),
+                       ("unknown boundary type", setter(["boundary", 0, "type"], "glued")),
+                       ("contradictory planes", setter(["boundary"], BASE["boundary"][:1] + [
+                           {"type": "plane", "normal": [1, 0, 0], "offset": offset,
+                            "nodes": {"plane": {"normal": [1, 0, 0], "offset": 1}}}
+                           for offset in (0.1, 0.2)])),
+                       ("nothing held under gravity", lambda s: s.update(
+                           boundary=[], gravity=[0, 0, -9.81])),
+                       ("negative penalty", setter(["contact"], {"model": "material_depth",
+                                                                 "penalty": -1}))]:
+        add("boundary and contact", name, {"scene.json": scene(edit)})
+
+    # Mesh files: Gmsh.
+    gm = lambda text: {"scene.json": scene(mesh_file="m.msh"), "m.msh": text}
+    mesh_where = ["m.msh"]
+    bad_node = lambda k, line: [line if i == k else n for i, n in enumerate(NODES)]
+    for name, text in [
+            ("empty file", ""),
+            ("unknown version", msh(header="9.9 0 8")),
+            ("binary format", msh(header="2.2 1 8")),
+            ("node section ends early", msh(node_count=9)),
+            ("element section cut off", msh(tail=False)),
+            ("negative node count", msh(node_count=-3)),
+            ("node count 2^40", msh(node_count=2**40)),
+            ("element count 2^40", msh(elem_count=2**40)),
+            ("coordinate not a number", msh(nodes=bad_node(2, "3 0 one 0"))),
+            ("coordinate nan", msh(nodes=bad_node(2, "3 nan 1 0"))),
+            ("coordinate inf", msh(nodes=bad_node(2, "3 inf 1 0"))),
+            ("coordinate 1e400", msh(nodes=bad_node(2, "3 1e400 1 0"))),
+            ("node number repeated", msh(nodes=bad_node(2, "2 0 1 0"))),
+            ("tet names node 0", msh(tets=[(0, 2, 4, 8)] + TETS[1:])),
+            ("tet names a missing node", msh(tets=[(1, 2, 4, 99)] + TETS[1:])),
+            ("tet listed twice", msh(tets=TETS + [TETS[0]])),
+            ("tet with a repeated node", msh(tets=[(1, 2, 2, 8)] + TETS[1:])),
+            ("flat tet (zero volume)", msh(tets=TETS + [(1, 2, 3, 4)])),
+            ("overlapping tets (a face in three)", msh(tets=TETS + [(1, 2, 4, 6)])),
+            ("node in no tet", msh(nodes=NODES + ["9 5 5 5"])),
+            ("no tets", msh(tets=[])),
+            ("three-node tet line", msh().replace("4 2 1 1 " + " ".join(map(str, TETS[0])),
+                                                  "4 2 1 1 1 2 3")),
+    ]:
+        add("mesh files: Gmsh", name, gm(text), names=mesh_where)
+    # TetGen.
+    tg_where = ["m.node", "m.ele"]
+    for name, (node, ele) in [
+            ("node count too large", (f"{99} 3 0 0\n" + "\n".join(NODES) + "\n",
+                                      tetgen()[1])),
+            ("element names a missing node", tetgen(tets=[(1, 2, 4, 99)] + TETS[1:])),
+            ("tet listed twice", tetgen(tets=TETS + [TETS[0]])),
+            ("flat tet", tetgen(tets=TETS + [(1, 2, 3, 4)])),
+            ("coordinate not a number", tetgen(nodes=bad_node(0, "1 x 0 0"))),
+            ("node in no tet", tetgen(nodes=NODES + ["9 5 5 5"])),
+            ("ele empty", (tetgen()[0], "")),
+    ]:
+        add("mesh files: TetGen", name, {"scene.json": scene(mesh_file="m.ele"),
+                                         "m.node": node, "m.ele": ele}, names=tg_where)
+    for name, text, names in [
+            ("OBJ surface given as a mesh", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", ["m.obj"]),
+            ("missing mesh file", None, ["m.msh"]),
+            ("unknown extension", "x", ["m.vtk"])]:
+        file = names[0]
+        files = {"scene.json": scene(mesh_file=file)}
+        if text is not None:
+            files[file] = text
+        add("mesh files: other", name, files, names=names)
+
+    # The command line.
+    ok = {"scene.json": scene(), "m.msh": msh()}
+    for name, args, names in [
+            ("--out is the scene", ["run", "scene.json", "--out", "scene.json"], where),
+            ("--out is the mesh", ["run", "scene_file.json", "--out", "m.msh"], ["m.msh"]),
+            ("--out in a missing folder", ["run", "scene.json", "--out", "no/dir/out.h5"],
+             ["no/dir/out.h5"]),
+            ("missing scene file", ["run", "nothing.json", "--out", "out.h5"], ["nothing.json"]),
+            ("scene is a folder", ["run", ".", "--out", "out.h5"], ["."]),
+            ("no --out", ["run", "scene.json"], ["--out"]),
+            ("--threads 0", run + ["--threads", "0"], ["--threads"]),
+            ("--threads 2^40", run + ["--threads", str(2**40)], ["--threads"]),
+            ("--threads word", run + ["--threads", "many"], ["--threads"]),
+            ("--set without =", run + ["--set", "solver.tolerance"], ["--set"]),
+            ("--set unknown path", run + ["--set", "solver.toleranse=1"], ["solver.toleranse"]),
+            ("--set bad JSON value", run + ["--set", "solver.tolerance=[1,"], ["--set"]),
+            ("--set index out of range", run + ["--set", "bodies.7.density=1"], ["bodies"]),
+            ("unknown option", run + ["--fast"], ["--fast"]),
+            ("unknown command", ["fly", "scene.json"], ["fly"]),
+            ("--step without --restart", run + ["--step", "3"], ["--step"]),
+            ("--restart from a missing file", run + ["--restart", "gone.h5"], ["gone.h5"]),
+            ("--restart from a non-HDF5 file", run + ["--restart", "m.msh"], ["m.msh"]),
+            ("info on a missing file", ["info", "gone.h5"], ["gone.h5"]),
+            ("info on a non-HDF5 file", ["info", "m.msh"], ["m.msh"]),
+    ]:
+        files = dict(ok)
+        if "scene_file.json" in args:
+            files["scene_file.json"] = scene(mesh_file="m.msh")
+        add("command line", name, files, args=args, names=names)
+    return out
+
+
+def classify(rc, err, names, seconds, timed_out):
+    lines = err.splitlines()
+    if timed_out:
+        return "hang"
+    if rc == 0:
+        return "accepted"
+    if rc not in (1, 2) or "Sanitizer" in err:
+        return "crash"
+    first = lines[0] if lines else ""
+    if not first.startswith("depthfem: error: ") or (rc == 1 and len(lines) != 1):
+        return "unlocated"
+    return "clean" if any(n in first for n in names) else "unlocated"
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("depthfem")
+    parser.add_argument("--csv", help="one row per case")
+    args = parser.parse_args()
+    exe = str(pathlib.Path(args.depthfem).resolve())
+    rows = []
+    for cls, name, files, argv, names, control in cases():
+        with tempfile.TemporaryDirectory() as tmp:
+            for file, text in files.items():
+                pathlib.Path(tmp, file).write_bytes(text.encode("utf-8", "surrogateescape"))
+            before = {f: pathlib.Path(tmp, f).read_bytes() for f in files}
+            start = time.monotonic()
+            try:
+                p = subprocess.run([exe, *argv], cwd=tmp, capture_output=True, timeout=30,
+                                   env={**os.environ, "OMP_NUM_THREADS": "1"})
+                rc, err, timed_out = p.returncode, p.stderr.decode(errors="replace"), False
+            except subprocess.TimeoutExpired as e:
+                rc, err, timed_out = None, (e.stderr or b"").decode(errors="replace"), True
+            seconds = time.monotonic() - start
+            outcome = classify(rc, err, names, seconds, timed_out)
+            changed = [f for f in files if pathlib.Path(tmp, f).read_bytes() != before[f]]
+        if control:
+            outcome = "control ok" if rc == 0 else "control FAILED"
+        elif changed:
+            outcome = "input overwritten"
+        first = err.splitlines()[0] if err.splitlines() else ""
+        rows.append({"class": cls, "case": name, "outcome": outcome, "exit": rc,
+                     "seconds": f"{seconds:.2f}", "message": first})
+    if args.csv:
+        with open(args.csv, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(rows[0]))
+            w.writeheader()
+            w.writerows(rows)
+    outcomes = ["clean", "unlocated", "accepted", "crash", "hang", "input overwritten"]
+    print("| class | cases | " + " | ".join(outcomes) + " |")
+    print("|---" * (len(outcomes) + 2) + "|")
+    classes = list(dict.fromkeys(r["class"] for r in rows if r["class"] != "control"))
+    for cls in classes + ["all"]:
+        sel = [r for r in rows if r["class"] != "control" and cls in ("all", r["class"])]
+        counts = [sum(r["outcome"] == o for r in sel) for o in outcomes]
+        print(f"| {cls} | {len(sel)} | " + " | ".join(map(str, counts)) + " |")
+    bad = [r for r in rows if r["outcome"] not in ("clean", "control ok")]
+    for r in bad:
+        print(f"{r['outcome']}: {r['class']}: {r['case']} (exit {r['exit']}): {r['message']}")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
