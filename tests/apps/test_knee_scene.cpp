@@ -48,7 +48,9 @@ TEST(KneeScene, LoadsBodiesRegionsAndConditions) {
 
 // The fine variant is the same scene on a mesh with more than three times the tets (a run of it
 // is a benchmark: bench/knee_flexion.sh).
-TEST(KneeScene, FineVariantDiffersOnlyInItsMesh) {
+// The fine variant: the same conditions, contact and materials on the fine mesh; of the solver
+// options only Newton's cap per increment differs (the default 30, as the fine run was made).
+TEST(KneeScene, FineVariantDiffersInItsMeshAndNewtonCap) {
   const Scene coarse = load("knee_flexion"), fine = load("knee_flexion_fine");
   EXPECT_GT(fine.mesh.num_tets(), 3 * coarse.mesh.num_tets());
   ASSERT_EQ(fine.constraints.size(), coarse.constraints.size());
@@ -56,6 +58,13 @@ TEST(KneeScene, FineVariantDiffersOnlyInItsMesh) {
     EXPECT_EQ(fine.constraints[k].name, coarse.constraints[k].name);
   EXPECT_EQ(fine.contact_options.penalty, coarse.contact_options.penalty);
   EXPECT_EQ(fine.groups.size(), coarse.groups.size());
+  const StaticOptions &c = coarse.static_options, &f = fine.static_options;
+  EXPECT_EQ(f.initial_increment, c.initial_increment);
+  EXPECT_EQ(f.max_increment, c.max_increment);
+  EXPECT_EQ(f.min_increment, c.min_increment);
+  EXPECT_EQ(f.newton.tolerance, c.newton.tolerance);
+  EXPECT_EQ(c.newton.max_iterations, 100);
+  EXPECT_EQ(f.newton.max_iterations, 30);
 }
 
 // The Veronda variant: the same scene with the soft tissue's model swapped, at the same
