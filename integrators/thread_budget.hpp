@@ -9,12 +9,15 @@ namespace depthfem {
 
 /// While alive, at most `threads` threads work at a time. TBB (assembly, products, contact
 /// search) runs at most that many. OpenBLAS, which the direct solver's supernodal factorisation
-/// calls, runs as many in its own pool; that pool and TBB's never work at the same time (the
-/// factorisation waits for the assembly and the reverse). CHOLMOD's OpenMP loops (clearing
+/// calls for factorisations above DirectSolverOptions::threaded_factor_flops, runs as many in
+/// its own pool (smaller ones and the triangular solves run it on one thread, SerialBlas); that
+/// pool and TBB's never work at the same time (the factorisation waits for the assembly and the
+/// reverse). CHOLMOD's OpenMP loops (clearing
 /// and filling supernodes: memory bound, four threads when left alone) run on the calling
 /// thread. With one thread no second thread runs: the pool OpenBLAS starts when it is loaded is
 /// stopped. PETSc (AMG) runs on the calling thread; MPI, which PETSc starts on first use, adds
-/// its own helper threads (Open MPI: two, asleep while a run computes). The command line, the
+/// a helper thread of its own (Open MPI as an isolated singleton: one, asleep while a run
+/// computes). The command line, the
 /// benchmarks and the tests all set their threads through this.
 class ThreadBudget {
  public:
