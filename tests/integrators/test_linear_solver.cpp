@@ -68,6 +68,28 @@ TEST(LinearSolver, EachMethodMeetsItsTolerance) {
   EXPECT_LE(residual(p.A, x, p.b), 1e-10);
 }
 
+// Newton's forcing term reaches the direct solver's CG on the kept factor: two solvers factor
+// the same matrix, its diagonal is then raised by 1 % of its mean, and each solves the changed
+// system, one to 0.1 and one to 1e-6: each meets its tolerance, the loose one by CG on its kept
+// factor alone, the tight one with more CG iterations or (on this small block, whose CG is
+// allowed two iterations before a factorisation) with a new factorisation.
+TEST(LinearSolver, DirectKeptFactorStopsAtTheGivenTolerance) {
+  Problem p = clamped_block(0.0);
+  DirectSolver loose_solver, tight_solver;
+  VectorX x;
+  EXPECT_TRUE(loose_solver.solve(p.A, p.b, x).factored);
+  EXPECT_TRUE(tight_solver.solve(p.A, p.b, x).factored);
+  const double raise = 0.01 * p.A.diagonal().mean();
+  for (Index i = 0; i < p.A.num_nodes(); ++i)
+    p.A.block(p.A.block_index(i, i)).diagonal().array() += raise;
+  const DirectSolveStats loose = loose_solver.solve(p.A, p.b, x, 0.1);
+  EXPECT_FALSE(loose.factored);
+  EXPECT_LE(residual(p.A, x, p.b), 0.1);
+  const DirectSolveStats tight = tight_solver.solve(p.A, p.b, x, 1e-6);
+  EXPECT_LE(residual(p.A, x, p.b), 1e-6);
+  EXPECT_TRUE(tight.factored || tight.cg_iterations > loose.cg_iterations);
+}
+
 TEST(LinearSolver, IterationCapIsHonoured) {
   const Problem p = clamped_block(0.0);
   LinearSolver s({LinearSolverKind::kGmres, 1e-12, 7, 5});
