@@ -10,10 +10,23 @@ namespace depthfem {
 
 namespace {
 
-// OpenBLAS's own controls, looked up at run time: with another BLAS there is nothing to set.
-template <class F>
-F openblas(const char* name) {
-  return reinterpret_cast<F>(dlsym(RTLD_DEFAULT, name));
+// OpenBLAS's own controls, looked up once at run time (null with another BLAS: nothing to set).
+// dlsym searches every library the process loaded (PETSc brings a hundred), tenths of a
+// millisecond a call, and SerialBlas asks around every triangular solve.
+struct OpenBlas {
+  template <class F>
+  static F find(const char* name) {
+    return reinterpret_cast<F>(dlsym(RTLD_DEFAULT, name));
+  }
+  void (*read_env)() = find<void (*)()>("openblas_read_env");
+  void (*set_threads)(int) = find<void (*)(int)>("openblas_set_num_threads");
+  int (*get_threads)() = find<int (*)()>("openblas_get_num_threads");
+  int (*stop)() = find<int (*)()>("blas_thread_shutdown_");
+};
+
+const OpenBlas& openblas() {
+  static const OpenBlas entries;
+  return entries;
 }
 
 void set_blas_threads(int threads) {
@@ -23,9 +36,10 @@ void set_blas_threads(int threads) {
   // from its environment variable (unless the user set one), read again; the pool is stopped
   // and starts with it at the next call allowed more than one thread (never, with one).
   setenv("OPENBLAS_THREAD_TIMEOUT", "4", 0);
-  if (auto read_env = openblas<void (*)()>("openblas_read_env")) read_env();
-  if (auto set = openblas<void (*)(int)>("openblas_set_num_threads")) set(threads);
-  if (auto stop = openblas<int (*)()>("blas_thread_shutdown_")) stop();
+  const OpenBlas& blas = openblas();
+  if (blas.read_env) blas.read_env();
+  if (blas.set_threads) blas.set_threads(threads);
+  if (blas.stop) blas.stop();
 }
 
 }  // namespace
@@ -44,20 +58,13 @@ ThreadBudget::ThreadBudget(int threads)
 ThreadBudget::~ThreadBudget() = default;
 
 SerialBlas::SerialBlas(bool serial) {
-  // Looked up once: dlsym over every library the process loaded (PETSc brings a hundred) costs
-  // tenths of a millisecond, and the direct solver asks twice per triangular solve.
-  static const auto get = openblas<int (*)()>("openblas_get_num_threads");
-  threads_ = serial && get ? get() : 1;
-  if (threads_ > 1) set_threads(1);
+  const OpenBlas& blas = openblas();
+  threads_ = serial && blas.get_threads && blas.set_threads ? blas.get_threads() : 1;
+  if (threads_ > 1) blas.set_threads(1);
 }
 
 SerialBlas::~SerialBlas() {
-  if (threads_ > 1) set_threads(threads_);
-}
-
-void SerialBlas::set_threads(int threads) {
-  static const auto set = openblas<void (*)(int)>("openblas_set_num_threads");
-  set(threads);
+  if (threads_ > 1) openblas().set_threads(threads_);
 }
 
 }  // namespace depthfem

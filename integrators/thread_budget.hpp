@@ -12,13 +12,12 @@ namespace depthfem {
 /// calls for factorisations above DirectSolverOptions::threaded_factor_flops, runs as many in
 /// its own pool (smaller ones and the triangular solves run it on one thread, SerialBlas); that
 /// pool and TBB's never work at the same time (the factorisation waits for the assembly and the
-/// reverse). CHOLMOD's OpenMP loops (clearing
-/// and filling supernodes: memory bound, four threads when left alone) run on the calling
-/// thread. With one thread no second thread runs: the pool OpenBLAS starts when it is loaded is
-/// stopped. PETSc (AMG) runs on the calling thread; MPI, which PETSc starts on first use, adds
-/// a helper thread of its own (Open MPI as an isolated singleton: one, asleep while a run
-/// computes). The command line, the
-/// benchmarks and the tests all set their threads through this.
+/// reverse). CHOLMOD's OpenMP loops (clearing and filling supernodes: memory bound, four threads
+/// when left alone) run on the calling thread. With one thread no second thread runs: the pool
+/// OpenBLAS starts when it is loaded is stopped. PETSc (AMG) runs on the calling thread; MPI,
+/// which PETSc starts on first use, adds a helper thread of its own (Open MPI as an isolated
+/// singleton: one, asleep while a run computes). The command line, the benchmarks and the tests
+/// all set their threads through this.
 class ThreadBudget {
  public:
   /// `threads` <= 0: one per core.
@@ -47,8 +46,7 @@ class SerialBlas {
   SerialBlas& operator=(const SerialBlas&) = delete;
 
  private:
-  static void set_threads(int threads);
-  int threads_;
+  int threads_;  ///< OpenBLAS's thread count before (1: nothing was changed)
 };
 
 }  // namespace depthfem
