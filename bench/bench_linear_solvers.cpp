@@ -82,9 +82,7 @@ void BM_DirectAnalysis(benchmark::State& state) {
   }
   state.counters["flops"] = a.flops;
   state.counters["L_entries"] = a.factor_entries;
-  // What LinearSolver's auto compares with auto_flops_per_entry.
-  state.counters["flops_per_entry"] =
-      a.flops / ((9.0 * p.A.num_blocks() + 3.0 * p.A.num_nodes()) / 2);
+  state.counters["flops_per_entry"] = a.flops / lower_triangle_entries(p.A);
   state.counters["metis"] = a.ordering == DirectOrdering::kMetis;
   set_counters(state, p);
 }
@@ -96,8 +94,7 @@ void BM_PredictedFlops(benchmark::State& state) {
   double flops = 0;
   for (auto _ : state) benchmark::DoNotOptimize(flops = predicted_factor_flops(p.A));
   state.counters["predicted_flops"] = flops;
-  state.counters["flops_per_entry"] =
-      flops / ((9.0 * p.A.num_blocks() + 3.0 * p.A.num_nodes()) / 2);
+  state.counters["flops_per_entry"] = flops / lower_triangle_entries(p.A);
   set_counters(state, p);
 }
 

@@ -85,6 +85,10 @@ double predicted_factor_flops(const BlockSparseMatrix& A) {
   return flops;
 }
 
+double lower_triangle_entries(const BlockSparseMatrix& A) {
+  return (9.0 * A.num_blocks() + 3.0 * A.num_nodes()) / 2;
+}
+
 struct DirectSolver::Impl {
   DirectSolverOptions options;
   cholmod_common c;

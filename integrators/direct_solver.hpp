@@ -48,6 +48,9 @@ struct DirectAnalysis {
 /// slight overestimate, and with AMD where DirectSolver::analyse may find METIS better). This
 /// is what LinearSolver's auto compares, before the direct solver is needed.
 double predicted_factor_flops(const BlockSparseMatrix& A);
+/// The scalar entries of A's lower triangle, diagonal included: what flops are counted per (a
+/// factorisation's flops per entry are large for a bulky mesh, small for a slender one).
+double lower_triangle_entries(const BlockSparseMatrix& A);
 
 /// What one direct solve did.
 struct DirectSolveStats {

@@ -42,10 +42,10 @@ LinearSolveStats LinearSolver::solve(const BlockSparseMatrix& A, const VectorX& 
   switch (options_.kind) {
     case LinearSolverKind::kAuto:
       if (choice_ == Choice::kUndecided) {
-        const double entries = (9.0 * A.num_blocks() + 3.0 * A.num_nodes()) / 2;
-        choice_ = predicted_factor_flops(A) > options_.auto_flops_per_entry * entries
-                      ? Choice::kAmg
-                      : Choice::kDirect;
+        choice_ =
+            predicted_factor_flops(A) > options_.auto_flops_per_entry * lower_triangle_entries(A)
+                ? Choice::kAmg
+                : Choice::kDirect;
       }
       return choice_ == Choice::kAmg ? amg(A, b, x, positions) : direct(A, b, x, tolerance);
     case LinearSolverKind::kAmg:
