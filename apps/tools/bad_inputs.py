@@ -13,8 +13,8 @@ one way (the classes of the README's reliability table). Outcomes:
   crash      killed by a signal or another exit status
   hang       still running after 30 s
 Control cases (the base scene with a generated mesh, Gmsh and TetGen files, a tet given in the
-other orientation, which the readers turn) must run and exit 0,
-so the harness cannot call everything clean by rejecting everything. Prints a table per class;
+other orientation, which the readers turn) must run and exit 0, so the harness cannot call
+everything clean by rejecting everything. Prints a table per class;
 exits 1 if any bad case is not clean or a control fails.
 """
 import argparse
@@ -91,22 +91,24 @@ def scene(edit=None, mesh_file=None):
     return json.dumps(s, indent=1)
 
 
+def parent(s, path):
+    """The object holding the last key of the path (a list of keys and indices)."""
+    for key in path[:-1]:
+        s = s[key]
+    return s
+
+
 def setter(path, value):
-    """An edit that sets the key path (a list of keys and indices) to value."""
+    """An edit that sets the key path to value."""
     def edit(s):
-        node = s
-        for key in path[:-1]:
-            node = node[key]
-        node[path[-1]] = value
+        parent(s, path)[path[-1]] = value
     return edit
 
 
 def removal(path):
+    """An edit that removes the key path."""
     def edit(s):
-        node = s
-        for key in path[:-1]:
-            node = node[key]
-        del node[path[-1]]
+        del parent(s, path)[path[-1]]
     return edit
 
 
@@ -308,7 +310,7 @@ def cases():
     return out
 
 
-def classify(rc, err, names, seconds, timed_out):
+def classify(rc, err, names, timed_out):
     lines = err.splitlines()
     if timed_out:
         return "hang"
@@ -342,7 +344,7 @@ def main():
             except subprocess.TimeoutExpired as e:
                 rc, err, timed_out = None, (e.stderr or b"").decode(errors="replace"), True
             seconds = time.monotonic() - start
-            outcome = classify(rc, err, names, seconds, timed_out)
+            outcome = classify(rc, err, names, timed_out)
             changed = [f for f in files if pathlib.Path(tmp, f).read_bytes() != before[f]]
         if control:
             outcome = "control ok" if rc == 0 else "control FAILED"

@@ -46,10 +46,9 @@ TEST(KneeScene, LoadsBodiesRegionsAndConditions) {
   }
 }
 
-// The fine variant is the same scene on a mesh with more than three times the tets (a run of it
-// is a benchmark: bench/knee_flexion.sh).
-// The fine variant: the same conditions, contact and materials on the fine mesh; of the solver
-// options only Newton's cap per increment differs (the default 30, as the fine run was made).
+// The fine variant: the same conditions, contact and materials on a mesh of more than three
+// times the tets; of the solver options only Newton's cap per increment differs (the default 30,
+// as the fine run was made). A run of it is a benchmark: bench/knee_flexion.sh.
 TEST(KneeScene, FineVariantDiffersInItsMeshAndNewtonCap) {
   const Scene coarse = load("knee_flexion"), fine = load("knee_flexion_fine");
   EXPECT_GT(fine.mesh.num_tets(), 3 * coarse.mesh.num_tets());
