@@ -31,8 +31,8 @@ struct LinearSolverOptions {
   int max_iterations = 1000;
   /// GMRES restart length.
   int restart = 50;
-  DirectSolverOptions direct;
-  AmgSolverOptions amg;
+  DirectSolverOptions direct{};
+  AmgSolverOptions amg{};
   /// kAuto: AMG-CG when a factorisation would take more flops than this per entry of the
   /// matrix's lower triangle (the measured crossover, README "Linear solvers").
   double auto_flops_per_entry = 2e4;
