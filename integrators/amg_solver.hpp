@@ -32,8 +32,9 @@ struct AmgSolveStats {
 };
 
 /// Solves A x = b for the symmetric positive definite block matrix A by PETSc's CG with an
-/// algebraic multigrid preconditioner. The matrix goes to PETSc as MPIAIJ with block size 3 on
-/// one rank (the type a multi-process run distributes); its scalar pattern is built once per
+/// algebraic multigrid preconditioner. The matrix goes to PETSc as AIJ with block size 3: the
+/// sequential type on one process (values then written straight into its array), MPIAIJ, the
+/// type a multi-process run distributes, on several; its scalar pattern is built once per
 /// pattern version and only the values are copied afterwards. The multigrid hierarchy is rebuilt
 /// for a new pattern; for new values of the same pattern GAMG keeps its interpolation and only
 /// recomputes the coarse operators. PETSc (and MPI) are initialised on first construction and

@@ -1,10 +1,12 @@
 // Linear solvers on a clamped elastic block: each reaches what it promises.
 #include <gtest/gtest.h>
+#include <petscsys.h>
 
 #include <cmath>
 #include <numeric>
 
 #include "core/mesh_generators.hpp"
+#include "integrators/amg_solver.hpp"
 #include "integrators/constraints.hpp"
 #include "integrators/direct_solver.hpp"
 #include "integrators/elasticity.hpp"
@@ -227,6 +229,33 @@ TEST(LinearSolver, AutoChoosesByThePredictedFlopsPerEntry) {
       EXPECT_GT(st.iterations, 1) << "the threshold below the prediction must choose AMG-CG";
     else
       EXPECT_EQ(st.iterations, 1) << "the threshold above the prediction must choose direct";
+  }
+}
+
+// AMG-CG hands the matrix to PETSc once per pattern and only its values afterwards: written
+// into the array of PETSc's sequential matrix on one process, or through MPIAIJ's update (the
+// multi-process type, forced on one by -mat_type). Both must solve the system as it is after
+// its values changed, to the tolerance, measured by depthfem's own product.
+TEST(LinearSolver, AmgSolvesTheUpdatedMatrixWithEitherPetscType) {
+  for (const bool distributed : {false, true}) {
+    Problem p = clamped_block(0.0);
+    AmgSolver amg({AmgPreconditioner::kGamg, 1e-10, 500, false});
+    if (distributed) {
+      ASSERT_EQ(PetscOptionsSetValue(nullptr, "-mat_type", "mpiaij"), 0);
+    }
+    VectorX x;
+    EXPECT_TRUE(amg.solve(p.A, p.b, x, nullptr).converged);
+    EXPECT_LE(residual(p.A, x, p.b), 1e-10);
+    if (distributed) {
+      PetscBool used = PETSC_FALSE;
+      ASSERT_EQ(PetscOptionsUsed(nullptr, "mat_type", &used), 0);
+      EXPECT_TRUE(used) << "the matrix type was not read from the options";
+      ASSERT_EQ(PetscOptionsClearValue(nullptr, "-mat_type"), 0);
+    }
+    for (Index i = 0; i < p.A.num_nodes(); ++i)  // new values, every block row different
+      p.A.block(p.A.block_index(i, i)).diagonal().array() *= 1.0 + 0.5 * (i % 3);
+    EXPECT_TRUE(amg.solve(p.A, p.b, x, nullptr).converged);
+    EXPECT_LE(residual(p.A, x, p.b), 1e-10) << (distributed ? "MPIAIJ" : "sequential AIJ");
   }
 }
 
