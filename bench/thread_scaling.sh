@@ -61,4 +61,4 @@ if [[ -n ${BEFORE:-} ]]; then
   done
   rm -f "$out/before.h5"
 fi
-column -t -s, "$out/process.csv"
+if command -v column > /dev/null; then column -t -s, "$out/process.csv"; else cat "$out/process.csv"; fi
