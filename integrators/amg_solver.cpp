@@ -65,10 +65,10 @@ void start_petsc() {
 
 struct AmgSolver::Impl {
   AmgSolverOptions options;
-  std::uint64_t version = 0;  // pattern version of the PETSc matrix and hierarchy (0: none)
-  ScalarPattern pattern;      // all entries, by rows
-  std::vector<double> values;
-  VectorX coordinates;  // interleaved positions for the rigid-body modes
+  std::uint64_t version = 0;   // pattern version of the PETSc matrix and hierarchy (0: none)
+  ScalarPattern pattern;       // all entries, by rows
+  std::vector<double> values;  // for MPIAIJ (a sequential A holds its values itself)
+  VectorX coordinates;         // interleaved positions for the rigid-body modes
   Mat A = nullptr;
   KSP ksp = nullptr;
   Vec b = nullptr, x = nullptr, coords = nullptr;
