@@ -6,7 +6,8 @@
 
 One row of panels per scene: wall and CPU seconds per Newton iteration, linear iterations per
 Newton iteration and peak memory, each against the number of unknowns, one line per solver. The
-legends give the exponent p of a least-squares fit t ~ n^p over the sizes that solver completed.
+legends give the exponent p of a least-squares fit t ~ n^p over the sizes that solver completed;
+the table's fit rows give it to three places, also over the three largest sizes and against tets.
 --before adds the rows of another CSV (the code before a change) as dashed lines.
 """
 import argparse
@@ -76,7 +77,12 @@ def main():
                       f"{k:.1f} | {float(r['newton_s_per_it']):.3g} | "
                       f"{float(r['linear_s_per_it']):.3g} | {float(r['cpu_s_per_it']):.3g} | "
                       f"{float(r['peak_mb']):.0f} |")
-            print(f"| {scene} | {name} | fit | | | | n^{p:.2f} | | n^{q:.2f} | |")
+            tets = [int(r["tets"]) for r in done]
+            fits = [("fit", n, t, cpu), ("fit, 3 largest", n[-3:], t[-3:], cpu[-3:]),
+                    ("fit against tets", tets, t, cpu)]
+            for what, x, wall, cpu_time in fits:
+                print(f"| {scene} | {name} | {what} | | | | n^{exponent(list(zip(x, wall))):.3f} | | "
+                      f"n^{exponent(list(zip(x, cpu_time))):.3f} | |")
         for ax, label in zip(row_axes, ["wall seconds per Newton iteration",
                                         "CPU seconds per Newton iteration",
                                         "linear iterations per Newton iteration",
