@@ -75,6 +75,7 @@ MaterialNames material_names(const Scene& scene) {
 void refuse_overwriting_inputs(const std::string& out, const std::vector<std::string>& inputs) {
   std::vector<std::string> written = results_sidecars(out);
   written.push_back(out);
+  written.push_back(results_lock_path(out));
   for (const std::string& path : written) {
     for (const std::string& input : inputs) {
       std::error_code error;
@@ -238,15 +239,19 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
 
   // Finish.
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  // A file that can no longer be written (a full disk) keeps its last flushed state.
+  // A file that can no longer grow (a full disk, a file-size limit) keeps its last flushed
+  // state, and still takes the outcome: the status and message overwrite space they own.
   if (file) {
-    try {
-      file->write_timing(result.timers.phases());
-      file->finish(result.success, result.message);
-    } catch (const InputError& e) {
-      result.message += (result.message.empty() ? "" : "; then ") + std::string(e.what());
-      result.success = false;
-    }
+    const auto write = [&](const auto& what) {
+      try {
+        what();
+      } catch (const InputError& e) {
+        result.message += (result.message.empty() ? "" : "; then ") + std::string(e.what());
+        result.success = false;
+      }
+    };
+    write([&] { file->write_timing(result.timers.phases()); });
+    write([&] { file->finish(result.success, result.message); });
   }
   return result;
 }

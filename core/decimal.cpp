@@ -11,4 +11,10 @@ double round_to_decimal(double value) {
   return std::strtod(text, nullptr);
 }
 
+std::string shown(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4g", value);
+  return text;
+}
+
 }  // namespace depthfem

@@ -1,5 +1,7 @@
 #pragma once
-/// Load factors and times as the decimals they stand for.
+/// Load factors and times as the decimals they stand for, and numbers as messages show them.
+
+#include <string>
 
 namespace depthfem {
 
@@ -9,5 +11,9 @@ namespace depthfem {
 /// are the doubles nearest to the decimals (0.44, 0.3), which print as such. The change is below
 /// 1e-12 of the value, far below any solver tolerance.
 double round_to_decimal(double value);
+
+/// A number in a message, to four significant digits at any scale (std::to_string would print
+/// 1.8e-4 as 0.000180 and 1e-9 as 0.000000).
+std::string shown(double value);
 
 }  // namespace depthfem

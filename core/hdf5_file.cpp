@@ -23,8 +23,11 @@ std::string take_string(char* value) {
 /// File access without HDF5's file locks, for writing and reading alike: a running simulation's
 /// results file stays readable by other processes (h5py, ParaView, `depthfem info`) between
 /// steps, and HDF5 refuses to reopen an open file with a different locking setting. Also turns
-/// HDF5's printing of error stacks off: failures become exceptions instead.
+/// HDF5's printing of error stacks off: failures become exceptions instead, and its clean-up at
+/// exit too: every file is closed by its H5File, and the clean-up crashes (HDF5 1.10) on a file
+/// whose close failed on a write error (a full disk, a file-size limit).
 Handle unlocked_access(const std::string& path) {
+  H5dont_atexit();  // takes effect only before the library's first call; harmless after
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   Handle access(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
   if (access.id() < 0 || H5Pset_file_locking(access.id(), false, true) < 0)
@@ -34,18 +37,18 @@ Handle unlocked_access(const std::string& path) {
 
 }  // namespace
 
-H5File H5File::create(const std::string& path) {
-  const Handle access = unlocked_access(path);
+H5File H5File::create(const std::string& path, const std::string& name) {
+  const Handle access = unlocked_access(name);
   // SWMR writing needs the 1.10 file format (its chunk indices and checksummed metadata).
   if (H5Pset_libver_bounds(access.id(), H5F_LIBVER_V110, H5F_LIBVER_V110) < 0)
-    throw InputError(located(path, 0, "cannot set up HDF5 file access"));
+    throw InputError(located(name, 0, "cannot set up HDF5 file access"));
   // A flush visits every entry of HDF5's metadata cache, which by default grows to megabytes
   // over a long run, so flushing after every step would cost more and more. A fixed cache of
   // 256 KiB keeps the cost per step flat (bench/bench_results_file.cpp, BM_LongRun).
   H5AC_cache_config_t cache;
   cache.version = H5AC__CURR_CACHE_CONFIG_VERSION;
   if (H5Pget_mdc_config(access.id(), &cache) < 0)
-    throw InputError(located(path, 0, "cannot set up HDF5 file access"));
+    throw InputError(located(name, 0, "cannot set up HDF5 file access"));
   cache.set_initial_size = true;
   cache.initial_size = cache.max_size = 256 * 1024;
   cache.min_size = 128 * 1024;
@@ -53,15 +56,15 @@ H5File H5File::create(const std::string& path) {
   cache.flash_incr_mode = H5C_flash_incr__off;
   cache.decr_mode = H5C_decr__off;
   if (H5Pset_mdc_config(access.id(), &cache) < 0)
-    throw InputError(located(path, 0, "cannot set up HDF5 file access"));
-  return H5File(path, H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, access.id()),
+    throw InputError(located(name, 0, "cannot set up HDF5 file access"));
+  return H5File(path, name, H5Fcreate(path.c_str(), H5F_ACC_EXCL, H5P_DEFAULT, access.id()),
                 "cannot create results file");
 }
 
 H5File H5File::open(const std::string& path) {
   const Handle access = unlocked_access(path);
   if (!std::filesystem::exists(path)) throw InputError(located(path, 0, "no such results file"));
-  return H5File(path, H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, access.id()),
+  return H5File(path, path, H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, access.id()),
                 "cannot be opened as an HDF5 file");
 }
 
@@ -69,20 +72,20 @@ void H5File::rename(const std::string& path) {
   std::error_code error;
   std::filesystem::rename(path_, path, error);
   if (error) fail("cannot be renamed to " + path + ": " + error.message());
-  path_ = path;
+  path_ = name_ = path;
 }
 
 void H5File::start_swmr_write() const {
   check(H5Fstart_swmr_write(file_.id()), "cannot start single-writer/multiple-reader mode");
 }
 
-H5File::H5File(std::string path, hid_t id, const char* failure)
-    : path_(std::move(path)), file_(id, H5Fclose) {
+H5File::H5File(std::string path, std::string name, hid_t id, const char* failure)
+    : path_(std::move(path)), name_(std::move(name)), file_(id, H5Fclose) {
   if (id < 0) fail(failure);
 }
 
 void H5File::fail(const std::string& what) const {
-  throw InputError(located(path_, 0, what));
+  throw InputError(located(name_, 0, what));
 }
 
 void H5File::flush() const {

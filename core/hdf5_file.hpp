@@ -52,9 +52,10 @@ struct H5Type<std::int32_t> {
 /// ("/steps/000001/x"); every failure throws InputError "FILE: cannot ... OBJECT".
 class H5File {
  public:
-  /// Creates (truncates) `path` for writing, in the HDF5 1.10 file format that single-writer /
-  /// multiple-reader (SWMR) access needs.
-  static H5File create(const std::string& path);
+  /// Creates `path` new for writing (never an existing file, nor through a symbolic link), in
+  /// the HDF5 1.10 file format that single-writer / multiple-reader (SWMR) access needs.
+  /// Messages name it `name` (the results file a staging file becomes) until it is renamed.
+  static H5File create(const std::string& path, const std::string& name);
   /// Opens `path` read-only as a SWMR reader: the file may be one that a writer is still
   /// writing, one whose writer was killed, or a closed one.
   static H5File open(const std::string& path);
@@ -184,7 +185,7 @@ class H5File {
   std::string string_attribute(const std::string& object, const std::string& name) const;
 
  private:
-  H5File(std::string path, hid_t id, const char* failure);
+  H5File(std::string path, std::string name, hid_t id, const char* failure);
 
   /// Returns `status`, or throws "FILE: WHAT" when it is negative (HDF5's failure value).
   template <class Status>
@@ -219,6 +220,7 @@ class H5File {
                         const std::string& what) const;
 
   std::string path_;
+  std::string name_;  ///< the file as messages name it
   Handle file_;
 };
 

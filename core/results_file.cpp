@@ -2,14 +2,18 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <optional>
 #include <utility>
 
 #include "core/error.hpp"
+#include "core/exclusive_file.hpp"
 #include "core/hdf5_file.hpp"
 
 namespace depthfem {
@@ -143,45 +147,70 @@ std::vector<std::string> results_sidecars(const std::string& path) {
   for (const auto& [sidecar, dialect] : sidecar_paths(path)) out.push_back(sidecar.string());
   return out;
 }
+std::string results_lock_path(const std::string& path) {
+  const std::filesystem::path file(path);
+  return (file.parent_path() / ("." + file.filename().string() + ".lock")).string();
+}
+
 // The writer's lock on a results file: the hidden file ".NAME.lock" beside it holds an
 // exclusive flock and the writer's process id while the run writes, so that a second run with
-// the same --out is refused before it truncates the file. Removed with the writer.
+// the same --out is refused before it truncates the file. Removed with the writer. The lock file
+// is never reached through a link, and a file of that name holding anything but a process id is
+// not a lock file: it is left as it is and the run refused.
 class WriterLock {
  public:
-  WriterLock(const std::string& path, const std::filesystem::path& lock_path)
-      : lock_path_(lock_path.string()) {
-    fd_ = ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-    if (fd_ < 0) throw InputError(located(path, 0, "cannot create the lock file " + lock_path_));
-    if (flock(fd_, LOCK_EX | LOCK_NB) != 0) {
-      char pid[32] = {};
-      const ssize_t n = pread(fd_, pid, sizeof pid - 1, 0);
-      ::close(fd_);
-      throw InputError(located(path, 0,
-                               "is being written by another depthfem run (process " +
-                                   std::string(pid, n > 0 ? size_t(n) : 0) +
-                                   "); wait for it to end or choose another --out"));
+  WriterLock(const std::string& path, std::string lock_path) : lock_path_(std::move(lock_path)) {
+    const auto refuse = [&](const std::string& why) { throw InputError(located(path, 0, why)); };
+    fd_ =
+        FileDescriptor(::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644));
+    if (!fd_.valid()) {
+      refuse(errno == ELOOP
+                 ? "the lock file " + lock_path_ +
+                       " is a symbolic link; a run makes its lock file itself (remove "
+                       "the link)"
+                 : "cannot create the lock file " + lock_path_ + " (" + std::strerror(errno) + ")");
+    }
+    struct stat status {};
+    if (fstat(fd_.get(), &status) != 0 || !S_ISREG(status.st_mode) || status.st_nlink != 1)
+      refuse("the lock file " + lock_path_ +
+             " is not a plain file of its own (a special file or one with other links); remove "
+             "it");
+    device_ = status.st_dev;
+    inode_ = status.st_ino;
+    char text[32] = {};
+    const ssize_t n = pread(fd_.get(), text, sizeof text - 1, 0);
+    const std::string_view held(text, n > 0 ? size_t(n) : 0);
+    if (n < 0 || n >= 24 || !std::ranges::all_of(held, [](char c) { return c >= '0' && c <= '9'; }))
+      refuse(lock_path_ + " is not a depthfem lock file (it holds more than a process id); " +
+             "remove it or choose another --out");
+    if (flock(fd_.get(), LOCK_EX | LOCK_NB) != 0) {
+      fd_ = FileDescriptor();
+      refuse("is being written by another depthfem run (process " + std::string(held) +
+             "); wait for it to end or choose another --out");
     }
     const std::string pid = std::to_string(getpid());
-    if (ftruncate(fd_, 0) != 0 || pwrite(fd_, pid.data(), pid.size(), 0) < 0) {
-      ::close(fd_);
-      throw InputError(located(path, 0, "cannot write the lock file " + lock_path_));
+    if (ftruncate(fd_.get(), 0) != 0 || pwrite(fd_.get(), pid.data(), pid.size(), 0) < 0) {
+      fd_ = FileDescriptor();
+      refuse("cannot write the lock file " + lock_path_);
     }
   }
-  WriterLock(WriterLock&& other) noexcept
-      : lock_path_(std::move(other.lock_path_)), fd_(std::exchange(other.fd_, -1)) {}
+  WriterLock(WriterLock&&) noexcept = default;
   WriterLock(const WriterLock&) = delete;
   WriterLock& operator=(const WriterLock&) = delete;
   WriterLock& operator=(WriterLock&&) = delete;
   ~WriterLock() {
-    if (fd_ < 0) return;
-    std::error_code ignored;
-    std::filesystem::remove(lock_path_, ignored);  // before the lock is released
-    ::close(fd_);
+    // Removed before the lock is released, and only while it is still this lock's file.
+    struct stat status {};
+    if (fd_.valid() && lstat(lock_path_.c_str(), &status) == 0 && status.st_dev == device_ &&
+        status.st_ino == inode_)
+      ::unlink(lock_path_.c_str());
   }
 
  private:
   std::string lock_path_;
-  int fd_ = -1;
+  FileDescriptor fd_;
+  dev_t device_ = 0;
+  ino_t inode_ = 0;
 };
 
 /// The datasets of a step, as rows of /steps/NAME: how many values a row has in each dimension
@@ -274,13 +303,19 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
                                  std::to_string(info.initial_velocity.rows()) + " rows, the mesh " +
                                  std::to_string(mesh.num_nodes()) + " nodes"));
   const std::filesystem::path directory = fs_path.parent_path(), name = fs_path.filename();
-  WriterLock lock(path, directory / ("." + name.string() + ".lock"));
-  // The file is built under a hidden name and takes its own name once readers can open it (in
-  // SWMR mode), so that a file of that name is always readable, even when the writer is killed.
-  const std::string staging = (directory / ("." + name.string() + ".partial")).string();
+  WriterLock lock(path, results_lock_path(path));
+  // The file is built under a new hidden name and takes its own name once readers can open it
+  // (in SWMR mode), so that a file of that name is always readable, even when the writer is
+  // killed.
+  const std::string prefix = (directory / ("." + name.string() + ".partial")).string();
+  std::string staging = random_name(prefix);
+  std::error_code unused;
+  for (int k = 0;
+       k < 32 && std::filesystem::exists(std::filesystem::symlink_status(staging, unused)); ++k)
+    staging = random_name(prefix);
   std::vector<SidecarBlock> blocks = sidecar_blocks(mesh, info);
   state_ = std::make_unique<State>(State{std::move(lock),
-                                         H5File::create(staging),
+                                         H5File::create(staging, path),
                                          mesh.X,
                                          mesh.num_tets(),
                                          mesh.tris,

@@ -120,6 +120,9 @@ ResultsSummary read_results_summary(const std::string& path);
 /// The sidecars of results file `path`, the paths the writer writes beside it.
 std::vector<std::string> results_sidecars(const std::string& path);
 
+/// The writer's lock file of results file `path`: ".NAME.lock" beside it.
+std::string results_lock_path(const std::string& path);
+
 /// Row of step `step` (its index) of dataset /steps/NAME ("x", "stress", "load", "residuals",
 /// ...) as #rows x #columns (one column for a series of vectors, 1 x 1 for scalars); throws
 /// InputError naming file, step and dataset if absent.

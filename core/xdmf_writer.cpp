@@ -1,8 +1,13 @@
 #include "core/xdmf_writer.hpp"
 
+#include <fcntl.h>
+#include <stdio.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <charconv>
+#include <cstring>
 #include <filesystem>
-#include <fstream>
 
 #include "core/error.hpp"
 
@@ -155,18 +160,18 @@ class GridText {
   XdmfDialect dialect_;
 };
 
-/// Replaces `path` by `text` through a temporary file and a rename, so that it is never partial.
-void write_file_atomically(const std::string& path, const std::string& text) {
-  const std::string temporary = path + ".tmp";
-  std::ofstream out(temporary, std::ios::trunc);
-  out << text;
-  out.close();
-  std::error_code error;
-  if (out) std::filesystem::rename(temporary, path, error);
-  if (!out || error) {
-    std::filesystem::remove(temporary, error);
-    throw InputError(located(path, 0, "cannot write XDMF sidecar"));
+/// A new hidden file ".NAME.XXXXXXXX" beside `path` (named NAME) holding `text`; throws
+/// InputError naming `path` when it cannot be written.
+NewFile written_beside(const std::string& path, std::string_view text) {
+  const std::filesystem::path file(path);
+  NewFile out = create_exclusive(file.parent_path(), "." + file.filename().string(), path);
+  if (!write_all_at(out.fd.get(), text, 0)) {
+    const std::string reason = std::strerror(errno);
+    std::error_code ignored;
+    std::filesystem::remove(out.path, ignored);
+    throw InputError(located(path, 0, "cannot write the XDMF sidecar (" + reason + ")"));
   }
+  return out;
 }
 
 }  // namespace
@@ -184,18 +189,58 @@ XdmfSidecar::XdmfSidecar(std::string path, SidecarLayout layout, const SidecarSt
       "    <Grid Name=\"states\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
   text += state(reference);
   end_ = static_cast<std::streamoff>(text.size());
-  write_file_atomically(path_, text + kTail);
+  text += kTail;
+  NewFile live = written_beside(path_, text);
+  std::error_code error;
+  std::filesystem::rename(live.path, path_, error);
+  if (error) {
+    std::filesystem::remove(live.path, error);
+    fail("cannot write the XDMF sidecar (" + error.message() + ")");
+  }
+  live_ = std::move(live.fd);
+  NewFile spare = written_beside(path_, text);
+  spare_ = std::move(spare.fd);
+  spare_path_ = std::move(spare.path);
+}
+
+XdmfSidecar::~XdmfSidecar() {
+  if (spare_.valid()) ::unlink(spare_path_.c_str());
 }
 
 void XdmfSidecar::append(const SidecarStep& step) {
+  if (broken_) fail("cannot append to the XDMF sidecar after a failed write");
   const std::string text = state(step);
   const std::string block = text + kTail;
-  std::fstream out(path_, std::ios::in | std::ios::out | std::ios::binary);
-  out.seekp(end_);
-  out.write(block.data(), static_cast<std::streamsize>(block.size()));
-  out.flush();
-  if (!out) throw InputError(located(path_, 0, "cannot append to the XDMF sidecar"));
+  broken_ = true;  // until both copies hold the step
+  if (!write_all_at(spare_.get(), block, end_))
+    fail(std::string("cannot append to the XDMF sidecar (") + std::strerror(errno) + ")");
   end_ += static_cast<std::streamoff>(text.size());
+  if (::renameat2(AT_FDCWD, spare_path_.c_str(), AT_FDCWD, path_.c_str(), RENAME_EXCHANGE) == 0) {
+    std::swap(live_, spare_);
+    if (!write_all_at(spare_.get(), block, end_ - static_cast<std::streamoff>(text.size())))
+      fail(spare_path_ + ", the spare, cannot be written (" + std::strerror(errno) + ")");
+  } else if (errno == EINVAL || errno == ENOSYS || errno == EOPNOTSUPP) {
+    // No exchanging rename on this file system: the spare, complete, replaces the sidecar, and
+    // a copy of it is the new spare.
+    std::error_code error;
+    std::filesystem::rename(spare_path_, path_, error);
+    if (error) fail("cannot replace the XDMF sidecar (" + error.message() + ")");
+    live_ = std::move(spare_);
+    std::string copy;
+    if (!read_all(live_.get(), copy))
+      fail(std::string("cannot read the XDMF sidecar back (") + std::strerror(errno) + ")");
+    NewFile spare = written_beside(path_, copy);
+    spare_ = std::move(spare.fd);
+    spare_path_ = std::move(spare.path);
+  } else {
+    fail(std::string("cannot exchange the XDMF sidecar with its spare (") + std::strerror(errno) +
+         ")");
+  }
+  broken_ = false;
+}
+
+void XdmfSidecar::fail(const std::string& what) const {
+  throw InputError(located(path_, 0, what));
 }
 
 std::string XdmfSidecar::state(const SidecarStep& step) const {

@@ -2,12 +2,13 @@
 /// The XDMF sidecar of a results file: the XML through which ParaView reads the HDF5 datasets
 /// as a time series of multiblock data sets (one tetrahedral block per body, or per element
 /// region of a body with several, plus the boundary surface), written step by step at a cost
-/// per step that does not grow with the run.
+/// per step that does not grow with the run, and complete whenever the run is killed.
 
 #include <ios>
 #include <string>
 #include <vector>
 
+#include "core/exclusive_file.hpp"
 #include "core/types.hpp"
 
 namespace depthfem {
@@ -64,24 +65,44 @@ struct SidecarStep {
 
 /// Writes the sidecar of a results file: a temporal collection whose every state is a spatial
 /// collection of one tetrahedral grid per block and the grid "boundary" (the boundary triangles,
-/// which carry the contact fields and the step's values). The file is complete after every call;
-/// each step is written in place of the closing tags, which follow it again.
+/// which carry the contact fields and the step's values).
+///
+/// The sidecar is complete at every instant, even when the run is killed in the middle of a
+/// write or the disk fills: two copies of it exist, the file at `path` and a hidden spare beside
+/// it (".NAME.xmf.XXXXXXXX", created exclusively). A step is written in place of the spare's
+/// closing tags (which follow it again), the two names are then exchanged in one atomic rename,
+/// and the step is written into the other copy, now the spare. The cost of a step is that of
+/// writing it twice, whatever the number of steps before. On a file system without exchanging
+/// renames the spare replaces the sidecar and a new spare is copied from it (a cost that grows
+/// with the run). The spare is removed with the writer; a killed run leaves it behind.
 class XdmfSidecar {
  public:
-  /// Writes `path` (through a temporary file and a rename) with the `reference` state as its
-  /// first entry. Throws InputError naming `path` when it cannot be written.
+  /// Writes `path` (a new file renamed to it) and its spare with the `reference` state as their
+  /// first entry. Throws InputError naming `path` when they cannot be written.
   XdmfSidecar(std::string path, SidecarLayout layout, const SidecarStep& reference);
+  XdmfSidecar(XdmfSidecar&&) noexcept = default;
+  XdmfSidecar& operator=(XdmfSidecar&&) noexcept = default;
+  XdmfSidecar(const XdmfSidecar&) = delete;
+  XdmfSidecar& operator=(const XdmfSidecar&) = delete;
+  /// Removes the spare.
+  ~XdmfSidecar();
 
-  /// Appends a state. Throws InputError naming the sidecar when it cannot be written.
+  /// Appends a state. Throws InputError naming the sidecar when it cannot be written; the
+  /// sidecar then still lists every state appended before.
   void append(const SidecarStep& step);
 
  private:
   /// The XML of one state.
   std::string state(const SidecarStep& step) const;
+  [[noreturn]] void fail(const std::string& what) const;
 
   std::string path_;
   SidecarLayout layout_;
-  std::streamoff end_ = 0;  ///< offset of the closing tags
+  FileDescriptor live_;   ///< the copy named `path_`
+  FileDescriptor spare_;  ///< the copy named `spare_path_`
+  std::string spare_path_;
+  std::streamoff end_ = 0;  ///< offset of the closing tags, the same in both copies
+  bool broken_ = false;     ///< a write failed: the spare no longer equals the sidecar
 };
 
 }  // namespace depthfem

@@ -4,17 +4,11 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/decimal.hpp"
+
 namespace depthfem {
 
 namespace {
-// A number in a message, to four significant digits at any scale (std::to_string would print
-// 1.8e-4 as 0.000180 and 1e-9 as 0.000000).
-std::string shown(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.4g", value);
-  return text;
-}
-
 // Fraction of the largest legal step the line search starts from (the energy barrier is
 // infinite at the step itself).
 constexpr double kMaxStepFraction = 0.9;

@@ -68,6 +68,14 @@ void StaticSolver::run(Points& x, double start_load) {
   while (load < 1.0) {
     double target = round_to_decimal(base + (count + 1) * increment);
     if (target > 1.0 || 1.0 - target <= 1e-9 * increment) target = 1.0;
+    // Every attempt must move the load: an increment below the resolution of the rounded load
+    // factors would land on the same load, "converge" at once and repeat forever.
+    if (!(target > load)) {
+      throw SolveError("load increment " + shown(increment) + " at load factor " + shown(load) +
+                       " no longer changes the load (load factors have 12 significant digits); " +
+                       "raise solver.min_increment" +
+                       (last_failure.empty() ? "" : ": " + last_failure));
+    }
     if (attempt(target, false)) {
       ++count;
       if (++successes >= 2 && increment < options_.max_increment)
