@@ -36,7 +36,7 @@ std::string format(const char* fmt, auto... args) {
 /// time-dependent analyses, contact fields where material-depth or obstacle contact fills them.
 ResultFields result_fields(const Scene& scene) {
   ResultFields fields = scene.output;
-  fields.velocity = scene.analysis != "static";
+  fields.velocity = scene.analysis != Analysis::kStatic;
   fields.contact =
       fields.contact && (scene.contact == ContactModel::kMaterialDepth || !scene.obstacles.empty());
   return fields;
@@ -133,7 +133,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     const auto refuse = [&](const std::string& why) {
       throw InputError(located(options.restart, 0, "cannot restart from it: " + why));
     };
-    if (scene.analysis != "static") refuse("restarts are for static analyses only");
+    if (scene.analysis != Analysis::kStatic) refuse("restarts are for static analyses only");
     const ResultsSummary previous = read_results_summary(options.restart);
     if (previous.num_nodes != mesh.num_nodes() || previous.num_tets != mesh.num_tets()) {
       refuse("it has " + std::to_string(previous.num_nodes) + " nodes and " +
@@ -162,7 +162,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     MaterialNames materials = material_names(scene);
     RunInfo info{scene.json_text,
                  kVersion,
-                 scene.analysis,
+                 to_string(scene.analysis),
                  threads,
                  {},
                  model->system.interface_names(),
@@ -208,7 +208,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   };
   StepLifecycle lifecycle(model->system, model->constraints, model->lifecycle_terms(), on_step);
   try {
-    if (scene.analysis == "static") {
+    if (scene.analysis == Analysis::kStatic) {
       StaticSolver(lifecycle, model->quasi_viscosity, model->static_options)
           .run(result.x, start_load);
     } else {

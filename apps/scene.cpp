@@ -16,7 +16,6 @@
 #include <variant>
 
 #include "apps/json_reader.hpp"
-#include "apps/scene_model.hpp"
 #include "core/error.hpp"
 #include "core/lumped_mass.hpp"
 #include "core/mesh_file.hpp"
@@ -24,6 +23,7 @@
 #include "core/mesh_regions.hpp"
 #include "core/node_sets.hpp"
 #include "core/results_file.hpp"
+#include "integrators/residual_scale.hpp"
 
 namespace depthfem {
 
@@ -436,7 +436,7 @@ void read_dynamic(JsonObject d, Scene& scene) {
   }
   const bool explicit_scheme =
       o.integrator == Integrator::kSymplecticEuler || o.integrator == Integrator::kArkode;
-  if (scene.analysis == "quasistatic") {
+  if (scene.analysis == Analysis::kQuasistatic) {
     // Viscous flow without inertia: only implicit Euler, and the viscosity is what resists motion.
     if (o.integrator != Integrator::kImplicitEuler)
       d.fail("integrator", "a quasistatic analysis uses implicit_euler");
@@ -612,13 +612,19 @@ void check_sizes(JsonObject& r, const MeshCounts& counts) {
   }
 }
 
-// A Newton test that is infinite would call any residual converged, one that underflows to
-// zero none: both come from extreme moduli, mesh sizes or tolerances. Residual norms square
-// forces of order E h^2, so E^2 and (E h^2)^2 must be finite and normal too.
-void check_newton_tolerance(JsonObject& r, const Scene& scene,
-                            const std::vector<std::string>& material_paths) {
-  NewtonOptions newton;
-  set_newton_tolerance(scene, newton);
+// The Newton test of the scene (see apps/README.md), for the static and the time-dependent
+// solvers alike: the residual divided per dof by the force of unit strain on a cell of the
+// stiffest material at that node (`force_scale`), its root mean square at most the scene's
+// relative tolerance (`tolerance` = that times sqrt(#dofs)).
+// A test that is infinite would call any residual converged, one that underflows to zero none:
+// both come from extreme moduli, mesh sizes or tolerances. Residual norms square forces of order
+// E h^2, so E^2 and (E h^2)^2 must be finite and normal too.
+void set_newton_test(JsonObject& r, Scene& scene, const std::vector<std::string>& material_paths) {
+  NewtonOptions& newton = scene.static_options.newton;
+  newton.force_scale = residual_force_scale(scene.mesh.X, scene.mesh.tets, scene.groups);
+  newton.tolerance = scene.tolerance * std::sqrt(3.0 * scene.mesh.num_nodes());
+  scene.dynamic_options.newton.force_scale = newton.force_scale;
+  scene.dynamic_options.newton.tolerance = newton.tolerance;
   size_t stiffest = 0;
   double E = 0;
   for (size_t g = 0; g < scene.groups.size(); ++g) {
@@ -643,6 +649,18 @@ void check_newton_tolerance(JsonObject& r, const Scene& scene,
 
 }  // namespace
 
+const char* to_string(Analysis analysis) {
+  switch (analysis) {
+    case Analysis::kStatic:
+      return "static";
+    case Analysis::kDynamic:
+      return "dynamic";
+    case Analysis::kQuasistatic:
+      return "quasistatic";
+  }
+  return "unknown";
+}
+
 Override parse_override(const std::string& text) {
   const auto eq = text.find('=');
   if (eq == std::string::npos || eq == 0)
@@ -662,12 +680,11 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
   JsonObject r(root, "", path);
   scene.name = r.string("name", std::filesystem::path(path).stem().string());
   r.ignore("description");
-  scene.analysis = r.string("analysis", "static");
-  if (scene.analysis != "static" && scene.analysis != "dynamic" &&
-      scene.analysis != "quasistatic") {
-    r.fail("analysis",
-           "unknown analysis '" + scene.analysis + "' (expected static, dynamic or quasistatic)");
-  }
+  scene.analysis =
+      r.choice<Analysis>("analysis", "analysis",
+                         {{to_string(Analysis::kStatic), Analysis::kStatic},
+                          {to_string(Analysis::kDynamic), Analysis::kDynamic},
+                          {to_string(Analysis::kQuasistatic), Analysis::kQuasistatic}});
   scene.gravity = r.vec3("gravity", Vec3::Zero());
 
   struct BodySpec {
@@ -742,10 +759,12 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
     o.finish();
   }
   if (r.has("dynamic")) {
-    if (scene.analysis == "static") r.fail("dynamic", "only for a dynamic or quasistatic analysis");
+    if (scene.analysis == Analysis::kStatic)
+      r.fail("dynamic", "only for a dynamic or quasistatic analysis");
     read_dynamic(r.object("dynamic"), scene);
-  } else if (scene.analysis != "static") {
-    r.fail("dynamic", "missing required key for a " + scene.analysis + " analysis");
+  } else if (scene.analysis != Analysis::kStatic) {
+    r.fail("dynamic",
+           "missing required key for a " + std::string(to_string(scene.analysis)) + " analysis");
   }
   scene.dynamic_options.newton = scene.static_options.newton;
   r.finish();
@@ -798,7 +817,7 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
   } catch (const InputError& e) {
     r.fail("boundary", e.what());
   }
-  check_newton_tolerance(r, scene, material_paths);
+  set_newton_test(r, scene, material_paths);
   return scene;
 }
 

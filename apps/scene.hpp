@@ -16,16 +16,27 @@
 
 namespace depthfem {
 
-/// Everything a run needs, read and validated from a scene file.
+/// What a scene solves for.
+enum class Analysis {
+  kStatic,       ///< equilibrium under a load ramped from 0 to 1
+  kDynamic,      ///< motion with inertia, by any integrator
+  kQuasistatic,  ///< viscous flow without inertia, by implicit Euler
+};
+
+/// The scene file's name of an analysis: "static", "dynamic" or "quasistatic".
+const char* to_string(Analysis analysis);
+
 /// Which contact model a scene uses between (and within) its bodies.
 enum class ContactModel { kNone, kMaterialDepth, kNodeToSurface };
+
+/// Everything a run needs, read and validated from a scene file.
 
 struct Scene {
   std::string name;
   std::string file;                 ///< path it was read from
   std::vector<std::string> inputs;  ///< every file the scene reads (itself, mesh files)
   std::string json_text;  ///< the (possibly overridden) scene as JSON, stored in the results
-  std::string analysis = "static";
+  Analysis analysis = Analysis::kStatic;
   Mesh mesh;
   std::vector<ElasticGroup> groups;  ///< one per deformable body
   ElasticityOptions elasticity;      ///< solver key hessian_projection
@@ -36,11 +47,11 @@ struct Scene {
   ContactModel contact = ContactModel::kNone;
   ContactOptions contact_options;
   std::vector<Obstacle> obstacles;
-  double quasi_viscosity = 0;   ///< [Pa]; 0: off
-  double tolerance = 1e-9;      ///< relative Newton tolerance (see scene docs)
-  bool ramp_body_loads = true;  ///< static analysis: gravity scales with the load factor
-  StaticOptions static_options;
-  DynamicOptions dynamic_options;  ///< analyses "dynamic" and "quasistatic"
+  double quasi_viscosity = 0;      ///< [Pa]; 0: off
+  double tolerance = 1e-9;         ///< relative Newton tolerance (see scene docs)
+  bool ramp_body_loads = true;     ///< static analysis: gravity scales with the load factor
+  StaticOptions static_options;    ///< with the scene's Newton test (set by load_scene)
+  DynamicOptions dynamic_options;  ///< analyses "dynamic" and "quasistatic"; the same Newton test
   double viscosity = 0;            ///< [Pa s] of a quasistatic analysis
   Points initial_velocity;         ///< #nodes x 3 [m/s]
   /// The "output" section: which fields the results file writes per step. `contact` asks for the

@@ -7,15 +7,9 @@
 #include "core/lumped_mass.hpp"
 #include "integrators/consistent_mass.hpp"
 #include "integrators/gravity.hpp"
-#include "integrators/residual_scale.hpp"
 #include "integrators/stiffness_tether.hpp"
 
 namespace depthfem {
-
-void set_newton_tolerance(const Scene& scene, NewtonOptions& newton) {
-  newton.force_scale = residual_force_scale(scene.mesh.X, scene.mesh.tets, scene.groups);
-  newton.tolerance = scene.tolerance * std::sqrt(3.0 * scene.mesh.num_nodes());
-}
 
 LifecycleTerms SceneModel::lifecycle_terms() const {
   LifecycleTerms terms;
@@ -34,7 +28,7 @@ std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers)
       &system.add(std::make_unique<Elasticity>(mesh.X, mesh.tets, scene.groups, scene.elasticity));
   model->lumped_mass = lumped_mass(mesh.X, mesh.tets, scene.tet_density);
   const VectorX& mass = model->lumped_mass;
-  const bool time_dependent = scene.analysis != "static";
+  const bool time_dependent = scene.analysis != Analysis::kStatic;
   if (scene.gravity.norm() > 0) {
     const bool ramp = !time_dependent && scene.ramp_body_loads;
     system.add(std::make_unique<Gravity>(mass, scene.gravity, ramp));
@@ -52,8 +46,8 @@ std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers)
             std::make_unique<ConsistentMass>(name, mesh.X, mesh.tets, scene.tet_density, factor));
       return &system.add(std::make_unique<NodalSpring>(name, factor * mass));
     };
-    if (scene.analysis == "dynamic") terms.inertia = mass_tether("inertia", 1.0);
-    if (scene.analysis == "quasistatic") {
+    if (scene.analysis == Analysis::kDynamic) terms.inertia = mass_tether("inertia", 1.0);
+    if (scene.analysis == Analysis::kQuasistatic) {
       terms.damping.push_back(&system.add(std::make_unique<NodalSpring>(
           "viscosity", quasi_viscosity_stiffness(mesh.X, mesh.tets, scene.viscosity))));
     }
@@ -89,10 +83,7 @@ std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers)
   }
   model->constraints = Constraints(mesh.X, scene.constraints);
   model->static_options = scene.static_options;
-  set_newton_tolerance(scene, model->static_options.newton);
   model->dynamic_options = scene.dynamic_options;
-  model->dynamic_options.newton.tolerance = model->static_options.newton.tolerance;
-  model->dynamic_options.newton.force_scale = model->static_options.newton.force_scale;
   return model;
 }
 

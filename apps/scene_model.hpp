@@ -38,9 +38,4 @@ struct SceneModel {
 /// (timed as collision detection). Throws InputError for inconsistent input.
 std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers);
 
-/// Sets the Newton test of a scene (see apps/README.md): the residual divided per dof by the
-/// force of unit strain on a cell of the stiffest material at that node (`force_scale`), its
-/// root mean square at most the scene's relative tolerance (`tolerance`).
-void set_newton_tolerance(const Scene& scene, NewtonOptions& newton);
-
 }  // namespace depthfem
