@@ -11,7 +11,7 @@ order drawn as a line. Rates are per CPU-second of the process; of repeated runs
     /usr/bin/python3 bench/plot_element_kernels.py bench/results/element_kernels.json \\
         --out bench/results/element_kernels.png [--table]
 
---table also prints the rates as the Markdown table of the README.
+--table also prints the rates as the Markdown table of bench/results/element_kernels.md.
 """
 import argparse
 import json

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The scaling study of the linear solvers (README "Linear solvers"): cantilever_gravity (bending)
+# The scaling study of the linear solvers (bench/results/scaling.md): cantilever_gravity (bending)
 # and sliding_blocks (material-depth contact) at five sizes from about 20 k to 1.07 M tets, with
 # each solver, one process per case (bench_scaling appends one CSV row each).
 #   bench/scaling.sh [OUT.csv] [SOLVER ...]     (from the repository root, after building;

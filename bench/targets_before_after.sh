@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The linear-solve targets of the README ("Linear solvers: scaling"), before against after: the
+# The linear-solve targets (bench/results/targets.md), before against after: the
 # sag bar (cantilever_gravity 80x8x8, E = 1 MPa) and the 160x16x16 cantilever, run alternately
 # by an older build and this one at 1 and 2 threads, twice; wall and CPU seconds of each process.
 #   bench/targets_before_after.sh BEFORE_DEPTHFEM [OUT.csv]    (from the repository root)

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Thread scaling of the linear solve (README, "Thread scaling to 16 cores"): the sag bar
+# Thread scaling of the linear solve (bench/results/thread_scaling_16core.md): the sag bar
 # (cantilever_gravity 80x8x8, E = 1 MPa) and the 160x16x16 cantilever with the default solver
 # (auto) and the direct one, at each thread count, one process per case; then the 480 k-tet
 # cantilever at the ends of the range; then, if BEFORE names an older depthfem, that build on the

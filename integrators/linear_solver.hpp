@@ -34,7 +34,7 @@ struct LinearSolverOptions {
   DirectSolverOptions direct{};
   AmgSolverOptions amg{};
   /// kAuto: AMG-CG when a factorisation would take more flops than this per entry of the
-  /// matrix's lower triangle (the measured crossover, README "Linear solvers").
+  /// matrix's lower triangle (the measured crossover, bench/results/scaling.md).
   double auto_flops_per_entry = 2e4;
 };
 

@@ -17,8 +17,8 @@ namespace depthfem {
 /// OpenBLAS starts when it is loaded is stopped. PETSc (AMG) runs on the calling thread, but
 /// for its vector operations, which it hands to BLAS: OpenBLAS shares those over more than
 /// 10,000 entries with its pool (on a 16-core machine no slower or faster than on the calling
-/// thread alone: README, "Thread scaling to 16 cores"). MPI, which PETSc starts on first use, adds
-/// a helper thread of its own (Open MPI as an isolated singleton: one, asleep while a run
+/// thread alone: bench/results/thread_scaling_16core.md). MPI, which PETSc starts on first use,
+/// adds a helper thread of its own (Open MPI as an isolated singleton: one, asleep while a run
 /// computes). The command line, the benchmarks and the tests all set their threads through this.
 class ThreadBudget {
  public:

@@ -4,7 +4,7 @@
     /usr/bin/python3 apps/tools/bad_inputs.py DEPTHFEM [--csv OUT.csv]
 
 Every case is one `depthfem` command on a scene, a mesh file or a command line that is wrong in
-one way (the classes of the README's reliability table). Outcomes:
+one way (the classes of bench/results/reliability.md). Outcomes:
   clean      exit 1 (2 for command-line usage), the first line of stderr is
              "depthfem: error: ..." and names where: the scene file, the mesh file and line, or
              the option; with exit 1 that is the only line

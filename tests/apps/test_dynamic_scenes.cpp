@@ -251,12 +251,12 @@ TEST(DynamicScenes, DampedAndViscousRunsSettleToTheStaticSolution) {
   }
 }
 
-// bars_drop over its whole 0.8 s, as the README tells it. The floor stops every node within 5 % of
-// the bar thickness (0.1 m; corners hit at up to 2.9 m/s), and implicit Euler with contact only
-// loses mechanical energy. At 0.2 s the low bar holds the middle one up (its centre above
-// 0.12 m, where lying on the floor would put it at 0.05 m); the top bar then lands on the middle
-// one's end and tips it over the low one like a see-saw (its raised end climbs above 0.3 m,
-// where lying across the low bar it reaches 0.2 m); nothing holds the low bar sideways (all
+// bars_drop over its whole 0.8 s, as bench/results/verification.md tells it. The floor stops every
+// node within 5 % of the bar thickness (0.1 m; corners hit at up to 2.9 m/s), and implicit Euler
+// with contact only loses mechanical energy. At 0.2 s the low bar holds the middle one up (its
+// centre above 0.12 m, where lying on the floor would put it at 0.05 m); the top bar then lands on
+// the middle one's end and tips it over the low one like a see-saw (its raised end climbs above
+// 0.3 m, where lying across the low bar it reaches 0.2 m); nothing holds the low bar sideways (all
 // contact is frictionless), so it is squeezed out from under the middle one, more than its own
 // width (0.1 m); at 0.8 s all three lie flat on the floor (centres within 2 mm of 0.05 m, tops
 // within 5 mm of 0.1 m).
