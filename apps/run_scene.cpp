@@ -57,12 +57,12 @@ MaterialNames material_names(const Scene& scene) {
     if (names.find(name) == std::string::npos) names += (names.empty() ? "" : ", ") + name;
   }
   for (size_t b = 0; b < out.bodies.size(); ++b) {
-    if (scene.rigid[b]) out.bodies[b] = "rigid";
+    if (scene.mesh.bodies[b].rigid) out.bodies[b] = "rigid";
     for (const Region& r : scene.mesh.bodies[b].regions) {
       const auto group = std::ranges::find_if(scene.groups, [&](const ElasticGroup& g) {
         return std::ranges::find(g.tets, r.first_tet) != g.tets.end();
       });
-      out.regions.push_back(scene.rigid[b]                ? "rigid"
+      out.regions.push_back(scene.mesh.bodies[b].rigid    ? "rigid"
                             : group != scene.groups.end() ? material_name(group->material)
                                                           : "");
     }

@@ -776,8 +776,8 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
     const LoadedMesh loaded = make_mesh(b.mesh, b.mesh_where);
     const Index id = scene.mesh.add_body(b.name, loaded.mesh, loaded.node_sets, loaded.region_names,
                                          loaded.tet_region);
-    const Body& body = scene.mesh.bodies[id];
-    scene.rigid.push_back(b.rigid);
+    Body& body = scene.mesh.bodies[id];
+    body.rigid = b.rigid;
     if (b.rigid) {
       // No unknowns: held in place unless a boundary condition on the body moves it.
       std::vector<Index> nodes(static_cast<size_t>(body.num_nodes));

@@ -40,7 +40,6 @@ struct Scene {
   Mesh mesh;
   std::vector<ElasticGroup> groups;  ///< one per deformable body
   ElasticityOptions elasticity;      ///< solver key hessian_projection
-  std::vector<bool> rigid;           ///< per body: prescribed motion only, no unknowns
   VectorX tet_density;               ///< [kg/m^3] per tet
   Vec3 gravity = Vec3::Zero();       ///< [m/s^2]
   std::vector<Constraint> constraints;

@@ -78,7 +78,7 @@ std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers)
   if (!scene.obstacles.empty()) {
     std::vector<Index> deformable;
     for (size_t b = 0; b < mesh.bodies.size(); ++b)
-      if (!scene.rigid[b]) deformable.push_back(static_cast<Index>(b));
+      if (!mesh.bodies[b].rigid) deformable.push_back(static_cast<Index>(b));
     system.add(std::make_unique<ObstacleContact>(mesh, deformable, scene.obstacles));
   }
   model->constraints = Constraints(mesh.X, scene.constraints);

@@ -23,6 +23,8 @@ struct Body {
   /// The body's element regions, one after the other over its tets, in the order in which their
   /// first tets appear in the body's mesh; empty when the mesh has none.
   std::vector<Region> regions;
+  /// Moved only by prescribed motion: its nodes are no unknowns and it has no material.
+  bool rigid = false;
 };
 
 /// Reference nodes, tets and outward boundary triangles of every body of a scene.
