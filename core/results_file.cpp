@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <utility>
 
@@ -273,6 +274,14 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
                              "the initial velocity has " +
                                  std::to_string(info.initial_velocity.rows()) + " rows, the mesh " +
                                  std::to_string(mesh.num_nodes()) + " nodes"));
+  std::map<std::string, std::string> stored;  // stored name -> node set
+  for (const auto& [set_name, nodes] : mesh.node_sets) {
+    const auto [it, fresh] = stored.emplace(stored_set_name(set_name), set_name);
+    if (!fresh)
+      throw InputError(located(path, 0,
+                               "node sets '" + it->second + "' and '" + set_name +
+                                   "' would both be stored as '" + it->first + "'"));
+  }
   const std::filesystem::path directory = fs_path.parent_path(), name = fs_path.filename();
   WriterLock lock(path, directory / ("." + name.string() + ".lock"));
   // The file is built under a hidden name and takes its own name once readers can open it (in
@@ -318,9 +327,7 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
     if (!mesh.node_sets.empty()) {
       f.create_group("/mesh/node_sets");
       for (const auto& [set_name, nodes] : mesh.node_sets) {
-        std::string object = set_name;  // '/' would open a subgroup
-        std::ranges::replace(object, '/', '_');
-        f.write_array("/mesh/node_sets/" + object,
+        f.write_array("/mesh/node_sets/" + stored_set_name(set_name),
                       Eigen::Map<const IndexVector>(nodes.data(), Eigen::Index(nodes.size())));
       }
     }
