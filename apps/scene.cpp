@@ -22,6 +22,7 @@
 #include "core/mesh_generators.hpp"
 #include "core/mesh_regions.hpp"
 #include "core/node_sets.hpp"
+#include "core/overlap_check.hpp"
 #include "core/results_file.hpp"
 #include "integrators/residual_scale.hpp"
 
@@ -100,7 +101,11 @@ LoadedMesh make_mesh(const MeshSpec& spec, const JsonObject& m) {
           LoadedMesh out;
           if constexpr (std::is_same_v<S, std::string>) {
             out = read_tet_mesh(source);
-            if (spec.regions.empty()) return out;
+            if (spec.regions.empty()) {
+              // The whole file as one body; without regions the reader has checked it.
+              if (!out.region_names.empty()) check_no_overlap(out.mesh, out.source, out.neighbours);
+              return out;
+            }
             try {
               return select_regions(out, spec.regions);
             } catch (const InputError& e) {
@@ -123,8 +128,9 @@ LoadedMesh make_mesh(const MeshSpec& spec, const JsonObject& m) {
       // Scaling or moving far can underflow or overflow coordinates: check the mesh again.
       mesh.X *= spec.scale;
       mesh.X.rowwise() += spec.translate.transpose();
-      MeshSource moved;
-      moved.file = "the scaled and translated mesh";
+      MeshSource moved = loaded.source;
+      moved.file = "the scaled and translated mesh" +
+                   (std::holds_alternative<std::string>(spec.source) ? " of " + moved.file : "");
       validate_and_orient(mesh, moved);
     }
     return loaded;
@@ -774,6 +780,18 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
   std::vector<Vec3> velocity;
   for (const BodySpec& b : bodies) {
     const LoadedMesh loaded = make_mesh(b.mesh, b.mesh_where);
+    // The results file stores a node set under stored_set_name: two names of different bodies'
+    // meshes must not become one there (a name they share is one set, holding the nodes of each).
+    for (const auto& [set, nodes] : loaded.node_sets) {
+      for (const auto& [earlier, earlier_nodes] : scene.mesh.node_sets) {
+        if (earlier != set && stored_set_name(earlier) == stored_set_name(set)) {
+          b.mesh_where.fail("", loaded.source.file + ": node set '" + set + "' and node set '" +
+                                    earlier + "' of an earlier body would be stored as the same '" +
+                                    stored_set_name(set) +
+                                    "' in the results file ('/' becomes '_'); rename one");
+        }
+      }
+    }
     const Index id = scene.mesh.add_body(b.name, loaded.mesh, loaded.node_sets, loaded.region_names,
                                          loaded.tet_region);
     Body& body = scene.mesh.bodies[id];

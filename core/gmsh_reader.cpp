@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/overlap_check.hpp"
 #include "core/text_parsing.hpp"
 
 namespace depthfem {
@@ -57,12 +58,12 @@ struct MshContent {
   std::vector<double> xyz;
   std::unordered_map<long long, Index> node_of_tag;
   MeshSource source;
-  std::vector<long long> tet_node_tags;  // 4 per tet
-  std::vector<long long> tet_tag;
-  std::vector<long long> tet_key;  // MSH 2.2: physical tag (0: none); MSH 4.1: entity tag
+  std::vector<long long> tet_node_tags;  // 4 per tet (their element tags: source.tet_number)
+  std::vector<long long> tet_key;        // MSH 2.2: physical tag (0: none); MSH 4.1: entity tag
   std::vector<LowerElement> lower;
   std::vector<long long> lower_node_tags;
   std::map<DimTag, std::string> physical_names;               // $PhysicalNames
+  std::map<DimTag, long> physical_name_line;                  // line of each $PhysicalNames entry
   std::map<DimTag, std::vector<long long>> entity_physicals;  // MSH 4.1 $Entities
   bool has_nodes = false, has_elements = false;
 };
@@ -137,6 +138,7 @@ void add_node(LineReader& in, MshContent& msh, long long tag, Tokens xyz) {
     }));
   }
   msh.source.node_line.push_back(in.line());
+  msh.source.node_number.push_back(tag);
 }
 
 // Keeps a 4-node tetrahedron and, where it may belong to a physical group, a lower-dimensional
@@ -170,7 +172,7 @@ void add_element(LineReader& in, MshContent& msh, long long tag, long long type,
   for (const std::string_view node : nodes) {
     msh.tet_node_tags.push_back(in.to_integer(node, [&] { return "a node tag of " + element(); }));
   }
-  msh.tet_tag.push_back(tag);
+  msh.source.tet_number.push_back(tag);
   msh.tet_key.push_back(key);
   msh.source.tet_line.push_back(in.line());
 }
@@ -303,7 +305,15 @@ void read_physical_names(LineReader& in, MshContent& msh) {
     if (dim < 0 || dim > 3) in.fail("physical group dimension must be 0..3, found " + quoted(t[0]));
     if (name.size() < 2 || name.front() != '"' || name.back() != '"')
       in.fail("physical name must be in double quotes, found " + quoted(name));
-    msh.physical_names[{static_cast<int>(dim), tag}] = std::string(name.substr(1, name.size() - 2));
+    if (name.size() == 2) in.fail("physical name must not be empty");
+    const DimTag key{static_cast<int>(dim), tag};
+    if (const auto it = msh.physical_name_line.find(key); it != msh.physical_name_line.end()) {
+      in.fail("physical group of dimension " + std::to_string(dim) + " and tag " +
+              std::to_string(tag) + " is named a second time (first at line " +
+              std::to_string(it->second) + ")");
+    }
+    msh.physical_names[key] = std::string(name.substr(1, name.size() - 2));
+    msh.physical_name_line[key] = in.line();
   }
   expect_section_end(in, "PhysicalNames");
 }
@@ -355,11 +365,71 @@ std::string physical_name(const MshContent& msh, int dim, long long tag) {
   return it != msh.physical_names.end() ? it->second : std::to_string(tag);
 }
 
+constexpr const char* kDimensionNames[] = {"point", "curve", "surface", "volume"};
+
+// A physical group that elements use, where it is defined: the line of its $PhysicalNames entry,
+// else of its first element.
+struct UsedGroup {
+  DimTag group;
+  long line;
+  bool named;
+};
+
+// "physical surface 'name' (tag T)", or "physical surface T (unnamed)".
+std::string describe(const MshContent& msh, const UsedGroup& g) {
+  const std::string kind =
+      std::string("physical ") + kDimensionNames[g.group.first] + " " +
+      (g.named ? "'" + msh.physical_names.at(g.group) + "' (tag " + std::to_string(g.group.second)
+               : std::to_string(g.group.second) + " (unnamed");
+  return kind + ", line " + std::to_string(g.line) + ")";
+}
+
+// Every physical group becomes a node set named after it, so two groups that elements use must
+// not have the same name (a surface and a volume called "fixed", or an unnamed surface and an
+// unnamed volume with the same tag, would make one set of the nodes of both), nor names that the
+// results file stores as one (stored_set_name).
+void check_group_names(const MshContent& msh, MshVersion version) {
+  std::map<DimTag, UsedGroup> used;
+  const auto use = [&](int dim, long long tag, long element_line) {
+    const DimTag group{dim, tag};
+    const auto named = msh.physical_name_line.find(group);
+    const bool is_named = named != msh.physical_name_line.end();
+    used.try_emplace(group, UsedGroup{group, is_named ? named->second : element_line, is_named});
+  };
+  for (size_t t = 0; t < msh.tet_key.size(); ++t)
+    for (long long tag : physical_tags(msh, version, {3, msh.tet_key[t]}))
+      use(3, tag, msh.source.tet_line[t]);
+  for (const LowerElement& e : msh.lower)
+    for (long long tag : physical_tags(msh, version, e.key)) use(e.key.first, tag, e.line);
+
+  std::vector<UsedGroup> groups;
+  for (const auto& [group, g] : used) groups.push_back(g);
+  std::ranges::stable_sort(groups, {}, &UsedGroup::line);
+  std::map<std::string, const UsedGroup*> by_name, by_stored_name;
+  for (const UsedGroup& g : groups) {
+    const std::string name = physical_name(msh, g.group.first, g.group.second);
+    const auto fail = [&](const UsedGroup& first, const std::string& why) {
+      throw InputError(located(msh.source.file, g.line,
+                               describe(msh, g) + " and " + describe(msh, first) + why));
+    };
+    if (const auto [it, fresh] = by_name.emplace(name, &g); !fresh) {
+      fail(*it->second,
+           " have the same name: the node set '" + name + "' would hold the nodes of both; " +
+               (g.named && it->second->named ? "rename one" : "name them in $PhysicalNames"));
+    }
+    if (const auto [it, fresh] = by_stored_name.emplace(stored_set_name(name), &g); !fresh) {
+      fail(*it->second, " would be stored as the same node set '" + stored_set_name(name) +
+                            "' in the results file ('/' becomes '_'); rename one");
+    }
+  }
+}
+
 // Regions from the physical volumes of the tets, and node sets from every physical group.
 void add_groups(const MshContent& msh, MshVersion version, const std::vector<Index>& tets,
                 LoadedMesh& out) {
+  check_group_names(msh, version);
   const std::string& file = msh.source.file;
-  const Index num_tets = static_cast<Index>(msh.tet_tag.size());
+  const Index num_tets = static_cast<Index>(msh.source.tet_number.size());
   std::map<long long, std::string> volume_names;  // physical tag -> name, in tag order
   std::vector<std::string> tet_name(static_cast<size_t>(num_tets));
   Index with = -1, without = -1;  // a tet with a region and one without
@@ -369,7 +439,7 @@ void add_groups(const MshContent& msh, MshVersion version, const std::vector<Ind
       names.insert(physical_name(msh, 3, tag));
       volume_names.emplace(tag, physical_name(msh, 3, tag));
     }
-    const auto element = "element " + std::to_string(msh.tet_tag[t]);
+    const auto element = "element " + std::to_string(msh.source.tet_number[t]);
     if (names.size() > 1) {
       throw InputError(located(file, msh.source.tet_line[t],
                                element + " belongs to the physical volumes '" + *names.begin() +
@@ -385,9 +455,9 @@ void add_groups(const MshContent& msh, MshVersion version, const std::vector<Ind
   }
   if (with >= 0 && without >= 0) {
     throw InputError(located(file, msh.source.tet_line[without],
-                             "element " + std::to_string(msh.tet_tag[without]) +
+                             "element " + std::to_string(msh.source.tet_number[without]) +
                                  " belongs to no physical volume, but element " +
-                                 std::to_string(msh.tet_tag[with]) + " belongs to '" +
+                                 std::to_string(msh.source.tet_number[with]) + " belongs to '" +
                                  tet_name[with] + "': give every tet a region or none"));
   }
   std::map<std::string, std::set<Index>> sets;
@@ -469,7 +539,7 @@ LoadedMesh read_gmsh(const std::string& path) {
     const auto it = msh.node_of_tag.find(msh.tet_node_tags[i]);
     if (it == msh.node_of_tag.end()) {
       throw InputError(located(path, msh.source.tet_line[i / 4],
-                               "element " + std::to_string(msh.tet_tag[i / 4]) +
+                               "element " + std::to_string(msh.source.tet_number[i / 4]) +
                                    " references node " + std::to_string(msh.tet_node_tags[i]) +
                                    ", which is not defined"));
     }
@@ -477,6 +547,7 @@ LoadedMesh read_gmsh(const std::string& path) {
   }
   LoadedMesh out = finish_loaded_mesh(msh.xyz, tets, msh.source);
   add_groups(msh, version, tets, out);
+  if (out.region_names.empty()) check_no_overlap(out.mesh, out.source, out.neighbours);
   return out;
 }
 

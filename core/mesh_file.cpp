@@ -30,7 +30,8 @@ LoadedMesh finish_loaded_mesh(const std::vector<double>& xyz, const std::vector<
   LoadedMesh out;
   out.mesh.X = from_row_major<Points>(xyz);
   out.mesh.tets = from_row_major<TetIndices>(tets);
-  out.reoriented = validate_and_orient(out.mesh, source);
+  out.reoriented = validate_and_orient(out.mesh, source, &out.neighbours);
+  out.source = source;
   return out;
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "core/error.hpp"
+#include "core/overlap_check.hpp"
 
 namespace depthfem {
 
@@ -38,8 +39,13 @@ LoadedMesh select_regions(const LoadedMesh& mesh, const std::vector<std::string>
     for (int c = 0; c < 4; ++c) new_index[mesh.mesh.tets(t, c)] = 0;
   }
   Index next = 0;
-  for (Index& i : new_index)
-    if (i == 0) i = next++;
+  std::vector<Index> kept_nodes;
+  for (Index i = 0; i < num_nodes; ++i) {
+    if (new_index[i] == 0) {
+      new_index[i] = next++;
+      kept_nodes.push_back(i);
+    }
+  }
   out.mesh.X.resize(next, 3);
   for (Index i = 0; i < num_nodes; ++i)
     if (new_index[i] >= 0) out.mesh.X.row(new_index[i]) = mesh.mesh.X.row(i);
@@ -49,12 +55,26 @@ LoadedMesh select_regions(const LoadedMesh& mesh, const std::vector<std::string>
     for (int c = 0; c < 4; ++c) out.mesh.tets(k, c) = new_index[mesh.mesh.tets(t, c)];
     out.tet_region.push_back(position[mesh.tet_region[t]]);
   }
+  if (mesh.neighbours.rows() == mesh.mesh.tets.rows()) {
+    // A neighbour left out makes the face part of the boundary.
+    std::vector<Index> new_tet(static_cast<size_t>(mesh.mesh.tets.rows()), -1);
+    for (size_t k = 0; k < kept_tets.size(); ++k) new_tet[kept_tets[k]] = static_cast<Index>(k);
+    out.neighbours.resize(out.mesh.tets.rows(), 4);
+    for (size_t k = 0; k < kept_tets.size(); ++k) {
+      for (int c = 0; c < 4; ++c) {
+        const Index across = mesh.neighbours(kept_tets[k], c);
+        out.neighbours(k, c) = across < 0 ? -1 : new_tet[across];
+      }
+    }
+  }
   for (const auto& [name, nodes] : mesh.node_sets) {
     std::vector<Index> kept;
     for (Index i : nodes)
       if (new_index[i] >= 0) kept.push_back(new_index[i]);
     if (!kept.empty()) out.node_sets[name] = std::move(kept);
   }
+  out.source = mesh.source.subset(kept_tets, kept_nodes);
+  check_no_overlap(out.mesh, out.source, out.neighbours);
   return out;
 }
 

@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <utility>
 
@@ -302,6 +303,14 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
                              "the initial velocity has " +
                                  std::to_string(info.initial_velocity.rows()) + " rows, the mesh " +
                                  std::to_string(mesh.num_nodes()) + " nodes"));
+  std::map<std::string, std::string> stored;  // stored name -> node set
+  for (const auto& [set_name, nodes] : mesh.node_sets) {
+    const auto [it, fresh] = stored.emplace(stored_set_name(set_name), set_name);
+    if (!fresh)
+      throw InputError(located(path, 0,
+                               "node sets '" + it->second + "' and '" + set_name +
+                                   "' would both be stored as '" + it->first + "'"));
+  }
   const std::filesystem::path directory = fs_path.parent_path(), name = fs_path.filename();
   WriterLock lock(path, results_lock_path(path));
   // The file is built under a new hidden name and takes its own name once readers can open it
@@ -353,9 +362,7 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
     if (!mesh.node_sets.empty()) {
       f.create_group("/mesh/node_sets");
       for (const auto& [set_name, nodes] : mesh.node_sets) {
-        std::string object = set_name;  // '/' would open a subgroup
-        std::ranges::replace(object, '/', '_');
-        f.write_array("/mesh/node_sets/" + object,
+        f.write_array("/mesh/node_sets/" + stored_set_name(set_name),
                       Eigen::Map<const IndexVector>(nodes.data(), Eigen::Index(nodes.size())));
       }
     }

@@ -14,22 +14,64 @@ double signed_volume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d)
   return (b - a).dot((c - a).cross(d - a)) / 6.0;
 }
 
+std::string stored_set_name(std::string name) {
+  std::ranges::replace(name, '/', '_');
+  return name;
+}
+
 namespace {
-long line_of(const std::vector<long>& lines, Index i) {
-  return i < static_cast<Index>(lines.size()) ? lines[i] : 0;
+template <class T>
+T entry_or(const std::vector<T>& v, Index i, T otherwise) {
+  return i >= 0 && i < static_cast<Index>(v.size()) ? v[static_cast<size_t>(i)] : otherwise;
+}
+}  // namespace
+
+long MeshSource::line_of_tet(Index t) const {
+  return entry_or(tet_line, t, 0L);
+}
+long MeshSource::line_of_node(Index i) const {
+  return entry_or(node_line, i, 0L);
 }
 
-// "FILE:LINE: node I WHAT" in the file that lists the nodes.
+long long MeshSource::file_node(Index i) const {
+  return entry_or(node_number, i, static_cast<long long>(i));
+}
+long long MeshSource::file_element(Index t) const {
+  return entry_or(tet_number, t, static_cast<long long>(t));
+}
+
+std::string MeshSource::node_name(Index i) const {
+  return "node " + std::to_string(file_node(i));
+}
+
+std::string MeshSource::element_name(Index t) const {
+  const long line = line_of_tet(t);
+  return "element " + std::to_string(file_element(t)) +
+         (line > 0 ? " (line " + std::to_string(line) + ")" : "");
+}
+
+MeshSource MeshSource::subset(const std::vector<Index>& tets,
+                              const std::vector<Index>& nodes) const {
+  MeshSource out;
+  out.file = file;
+  out.node_file = node_file;
+  const auto pick = [](const auto& from, const std::vector<Index>& which, auto& to) {
+    if (from.empty()) return;
+    to.reserve(which.size());
+    for (const Index i : which) to.push_back(from.at(static_cast<size_t>(i)));
+  };
+  pick(tet_line, tets, out.tet_line);
+  pick(tet_number, tets, out.tet_number);
+  pick(node_line, nodes, out.node_line);
+  pick(node_number, nodes, out.node_number);
+  return out;
+}
+
+namespace {
+// "FILE:LINE: node N WHAT" in the file that lists the nodes.
 InputError node_error(const MeshSource& source, Index i, const std::string& what) {
-  return InputError(located(source.node_file.empty() ? source.file : source.node_file,
-                            line_of(source.node_line, i),
-                            "node " + std::to_string(i) + " " + what));
-}
-
-// "element T (line L)", or "element T" when the line is unknown.
-std::string element_at(const MeshSource& source, Index t) {
-  const long line = line_of(source.tet_line, t);
-  return "element " + std::to_string(t) + (line > 0 ? " (line " + std::to_string(line) + ")" : "");
+  return InputError(
+      located(source.nodes_file(), source.line_of_node(i), source.node_name(i) + " " + what));
 }
 
 // Whether face `local` of tet t, oriented outward, is an odd permutation of its sorted nodes.
@@ -40,33 +82,43 @@ bool odd(const TetIndices& tets, Index t, int local) {
   return ((a > b) + (a > c) + (b > c)) % 2 == 1;
 }
 
+// The file's numbers of the nodes of a face, "a b c".
+std::string node_numbers(const MeshSource& source, const std::array<Index, 3>& nodes) {
+  std::string out;
+  for (const Index i : nodes) out += (out.empty() ? "" : " ") + std::to_string(source.file_node(i));
+  return out;
+}
+
 // Every face belongs to one tet (boundary) or two on opposite sides of it (interior). A tet listed
 // twice, or two tets folded over each other, see a face with the same orientation; a third tet on
-// a face overlaps one of the other two.
-void check_faces(const TetIndices& tets, const MeshSource& source) {
+// a face overlaps one of the other two. Fills `neighbours` (see validate_and_orient).
+void check_faces(const TetIndices& tets, const MeshSource& source, TetIndices& neighbours) {
   const std::vector<TetFace> faces = face_table(tets);
+  neighbours.setConstant(tets.rows(), 4, -1);
   for (size_t i = 0; i + 1 < faces.size(); ++i) {
     const TetFace &f = faces[i], &g = faces[i + 1];
     if (f.sorted != g.sorted) continue;
+    neighbours(f.tet, f.local) = g.tet;
+    neighbours(g.tet, g.local) = f.tet;
     const auto fail = [&](const std::string& what) {
-      throw InputError(located(source.file, line_of(source.tet_line, g.tet),
-                               element_at(source, g.tet) + " " + what));
+      throw InputError(
+          located(source.file, source.line_of_tet(g.tet), source.element_name(g.tet) + " " + what));
     };
     if (i + 2 < faces.size() && faces[i + 2].sorted == f.sorted) {
+      const Index third = faces[i + 2].tet;
       throw InputError(
-          located(source.file, line_of(source.tet_line, faces[i + 2].tet),
-                  "face (" + std::to_string(f.sorted[0]) + " " + std::to_string(f.sorted[1]) + " " +
-                      std::to_string(f.sorted[2]) +
-                      ") belongs to three or more elements: " + element_at(source, f.tet) + ", " +
-                      element_at(source, g.tet) + ", " + element_at(source, faces[i + 2].tet)));
+          located(source.file, source.line_of_tet(third),
+                  "face (" + node_numbers(source, f.sorted) +
+                      ") belongs to three or more elements: " + source.element_name(f.tet) + ", " +
+                      source.element_name(g.tet) + ", " + source.element_name(third)));
     }
     if (odd(tets, f.tet, f.local) != odd(tets, g.tet, g.local)) continue;
     std::array<Index, 4> x, y;
     for (int k = 0; k < 4; ++k) x[k] = tets(f.tet, k), y[k] = tets(g.tet, k);
     std::sort(x.begin(), x.end());
     std::sort(y.begin(), y.end());
-    if (x == y) fail("repeats the nodes of " + element_at(source, f.tet));
-    fail("overlaps " + element_at(source, f.tet) +
+    if (x == y) fail("repeats the nodes of " + source.element_name(f.tet));
+    fail("overlaps " + source.element_name(f.tet) +
          ": both lie on the same side of their shared face");
   }
 }
@@ -84,7 +136,7 @@ void check_every_node_used(const TetMesh& mesh, const MeshSource& source) {
 }
 }  // namespace
 
-Index validate_and_orient(TetMesh& mesh, const MeshSource& source) {
+Index validate_and_orient(TetMesh& mesh, const MeshSource& source, TetIndices* neighbours) {
   const Index n_nodes = static_cast<Index>(mesh.X.rows());
   for (Index i = 0; i < n_nodes; ++i) {
     if (!mesh.X.row(i).allFinite()) {
@@ -94,8 +146,7 @@ Index validate_and_orient(TetMesh& mesh, const MeshSource& source) {
   Index flipped = 0;
   for (Index t = 0; t < mesh.tets.rows(); ++t) {
     const auto where = [&](const std::string& what) {
-      return located(source.file, line_of(source.tet_line, t),
-                     "element " + std::to_string(t) + " " + what);
+      return located(source.file, source.line_of_tet(t), source.element_name(t) + " " + what);
     };
     for (int k = 0; k < 4; ++k) {
       const Index v = mesh.tets(t, k);
@@ -119,7 +170,8 @@ Index validate_and_orient(TetMesh& mesh, const MeshSource& source) {
       ++flipped;
     }
   }
-  check_faces(mesh.tets, source);
+  TetIndices across;
+  check_faces(mesh.tets, source, neighbours ? *neighbours : across);
   check_every_node_used(mesh, source);
   return flipped;
 }

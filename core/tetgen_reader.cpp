@@ -3,6 +3,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/overlap_check.hpp"
 #include "core/text_parsing.hpp"
 
 namespace depthfem {
@@ -100,6 +101,7 @@ LoadedMesh read_tetgen(const std::string& path) {
   source.file = base + ".ele";
   source.node_file = base + ".node";
   source.node_line = nodes.line;
+  for (long long i = 0; i < num_nodes; ++i) source.node_number.push_back(nodes.first + i);
   LineReader in(source.file, '#');
   const std::vector<Index> header =
       read_header(in, 3, "#tetrahedra nodes-per-tetrahedron #attributes");
@@ -126,9 +128,12 @@ LoadedMesh read_tetgen(const std::string& path) {
       tets.push_back(static_cast<Index>(node - nodes.first));
     }
     source.tet_line.push_back(in.line());
+    source.tet_number.push_back(number);
   }
   expect_file_end(in, count, "tetrahedra");
-  return finish_loaded_mesh(nodes.xyz, tets, source);
+  LoadedMesh out = finish_loaded_mesh(nodes.xyz, tets, source);
+  check_no_overlap(out.mesh, out.source, out.neighbours);
+  return out;
 }
 
 }  // namespace depthfem

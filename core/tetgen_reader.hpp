@@ -11,7 +11,8 @@ namespace depthfem {
 /// point attributes, boundary markers and region attributes are read past and dropped. Numbering
 /// starts at 0 or 1, as the first point decides. Throws InputError naming file, line and node or
 /// tetrahedron for malformed numbers, truncated files, undefined node references and 10-node
-/// (quadratic) tetrahedra; the mesh is then checked by validate_and_orient.
+/// (quadratic) tetrahedra; the mesh is then checked by validate_and_orient and check_no_overlap
+/// (one body), whose messages name points and tetrahedra by their numbers in the files.
 LoadedMesh read_tetgen(const std::string& path);
 
 }  // namespace depthfem

@@ -13,7 +13,7 @@ one way (the classes of bench/results/reliability.md). Outcomes:
   crash      killed by a signal or another exit status
   hang       still running after 30 s
 Control cases (the base scene with a generated mesh, Gmsh and TetGen files, a tet given in the
-other orientation, which the readers turn) must run and exit 0, so the harness cannot call
+other orientation, which the readers turn, physical groups) must run and exit 0, so the harness cannot call
 everything clean by rejecting everything. Prints a table per class;
 exits 1 if any bad case is not clean or a control fails.
 """
@@ -58,16 +58,30 @@ def positive(tet):
 
 TETS = [tuple(i + 1 for i in positive(t)) for t in KUHN]
 NODES = [f"{i + 1} {x} {y} {z}" for i, (x, y, z) in enumerate(CORNERS)]
+# A small tet on nodes 9..12 of its own: inside the cube (sharing no face with its tets), and one
+# through the cube's top face.
+INSIDE = NODES + [f"{9 + k} {x} {y} {z}" for k, (x, y, z) in enumerate(
+    [(0.7, 0.45, 0.2), (0.8, 0.45, 0.2), (0.7, 0.55, 0.2), (0.7, 0.45, 0.3)])]
+STICKING_OUT = NODES + [f"{9 + k} {x} {y} {z}" for k, (x, y, z) in enumerate(
+    [(0.4, 0.4, 0.8), (0.6, 0.4, 0.8), (0.5, 0.6, 0.8), (0.5, 0.5, 1.3)])]
+EXTRA = (9, 10, 11, 12)
 
 
-def msh(nodes=None, tets=None, header="2.2 0 8", node_count=None, elem_count=None, tail=True):
-    """A Gmsh 2.2 unit cube (8 nodes, 6 tets) with the given parts replaced."""
+def msh(nodes=None, tets=None, header="2.2 0 8", node_count=None, elem_count=None, tail=True,
+        names=(), triangles=()):
+    """A Gmsh 2.2 unit cube (8 nodes, 6 tets in the physical volume 1) with the given parts
+    replaced, $PhysicalNames entries ("dim tag \"name\"") and triangles (physical tag, nodes)."""
     nodes = NODES if nodes is None else nodes
     tets = TETS if tets is None else tets
-    lines = ["$MeshFormat", header, "$EndMeshFormat", "$Nodes",
-             str(len(nodes) if node_count is None else node_count), *nodes, "$EndNodes",
-             "$Elements", str(len(tets) if elem_count is None else elem_count)]
+    lines = ["$MeshFormat", header, "$EndMeshFormat"]
+    if names:
+        lines += ["$PhysicalNames", str(len(names)), *names, "$EndPhysicalNames"]
+    count = len(tets) + len(triangles)
+    lines += ["$Nodes", str(len(nodes) if node_count is None else node_count), *nodes, "$EndNodes",
+              "$Elements", str(count if elem_count is None else elem_count)]
     lines += [f"{k + 1} 4 2 1 1 " + " ".join(map(str, t)) for k, t in enumerate(tets)]
+    lines += [f"{len(tets) + k + 1} 2 2 {tag} 1 " + " ".join(map(str, t))
+              for k, (tag, *t) in enumerate(triangles)]
     if tail:
         lines.append("$EndElements")
     return "\n".join(lines) + "\n"
@@ -129,6 +143,10 @@ def cases():
     add("control", "a tet in the other orientation (reoriented)",
         {"scene.json": scene(mesh_file="m.msh"),
          "m.msh": msh(tets=[(TETS[0][0], TETS[0][1], TETS[0][3], TETS[0][2])] + TETS[1:])},
+        control=True)
+    add("control", "Gmsh file with a named surface and volume",
+        {"scene.json": scene(mesh_file="m.msh"),
+         "m.msh": msh(names=['2 2 "bottom"', '3 1 "cube"'], triangles=[(2, 1, 2, 4)])},
         control=True)
     add("control", "base scene, TetGen files", {"scene.json": scene(mesh_file="m.ele"),
                                                 "m.node": node, "m.ele": ele}, control=True)
@@ -248,6 +266,14 @@ def cases():
             ("tet with a repeated node", msh(tets=[(1, 2, 2, 8)] + TETS[1:])),
             ("flat tet (zero volume)", msh(tets=TETS + [(1, 2, 3, 4)])),
             ("overlapping tets (a face in three)", msh(tets=TETS + [(1, 2, 4, 6)])),
+            ("tet inside others, sharing no face", msh(nodes=INSIDE, tets=TETS + [EXTRA])),
+            ("tet sticking out of the others", msh(nodes=STICKING_OUT, tets=TETS + [EXTRA])),
+            ("corner tet of the cube's own nodes", msh(tets=TETS + [(1, 2, 3, 5)])),
+            ("surface and volume of the same name",
+             msh(names=['2 2 "cube"', '3 1 "cube"'], triangles=[(2, 1, 2, 4)])),
+            ("unnamed surface and volume of the same tag", msh(triangles=[(1, 1, 2, 4)])),
+            ("names the results file stores as one ('/' is '_')",
+             msh(names=['2 2 "a/b"', '3 1 "a_b"'], triangles=[(2, 1, 2, 4)])),
             ("node in no tet", msh(nodes=NODES + ["9 5 5 5"])),
             ("no tets", msh(tets=[])),
             ("three-node tet line", msh().replace("4 2 1 1 " + " ".join(map(str, TETS[0])),
@@ -262,12 +288,22 @@ def cases():
             ("element names a missing node", tetgen(tets=[(1, 2, 4, 99)] + TETS[1:])),
             ("tet listed twice", tetgen(tets=TETS + [TETS[0]])),
             ("flat tet", tetgen(tets=TETS + [(1, 2, 3, 4)])),
+            ("tet inside others, sharing no face", tetgen(nodes=INSIDE, tets=TETS + [EXTRA])),
+            ("tet sticking out of the others", tetgen(nodes=STICKING_OUT, tets=TETS + [EXTRA])),
             ("coordinate not a number", tetgen(nodes=bad_node(0, "1 x 0 0"))),
             ("node in no tet", tetgen(nodes=NODES + ["9 5 5 5"])),
             ("ele empty", (tetgen()[0], "")),
     ]:
         add("mesh files: TetGen", name, {"scene.json": scene(mesh_file="m.ele"),
                                          "m.node": node, "m.ele": ele}, names=tg_where)
+    def second_body(s):
+        s["bodies"].append({"name": "other", "mesh": {"file": "b.msh", "translate": [3, 0, 0]},
+                            "material": BASE["bodies"][0]["material"]})
+    add("mesh files: other", "two meshes' node sets stored as one ('a/b', 'a_b')",
+        {"scene.json": scene(second_body, mesh_file="a.msh"),
+         "a.msh": msh(names=['2 2 "a/b"', '3 1 "cube"'], triangles=[(2, 1, 2, 4)]),
+         "b.msh": msh(names=['2 2 "a_b"', '3 1 "cube"'], triangles=[(2, 1, 2, 4)])},
+        names=["b.msh"])
     for name, text, names in [
             ("OBJ surface given as a mesh", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", ["m.obj"]),
             ("missing mesh file", None, ["m.msh"]),

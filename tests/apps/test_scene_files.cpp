@@ -447,5 +447,59 @@ TEST_F(RegionSceneTest, RegionAndSetErrorsNameFileKeyAndChoices) {
       std::string::npos);
 }
 
+// testing::kTwoRegionMsh with a second tet in "bone" on nodes of its own (61..64, lines 17..20),
+// inside the "soft" tet: each region alone is a valid body, both together overlap.
+std::string overlapping_regions() {
+  std::string text = testing::kTwoRegionMsh;
+  text = replaced(text, "$Nodes\n5\n", "$Nodes\n9\n");
+  text = replaced(text, "$EndNodes\n",
+                  "61 0.4 0.1 0.6\n62 0.6 0.1 0.6\n63 0.4 0.3 0.6\n64 0.4 0.1 0.8\n$EndNodes\n");
+  text = replaced(text, "$Elements\n4\n", "$Elements\n5\n");
+  return replaced(text, "$EndElements\n", "49 4 2 2 2 61 62 63 64\n$EndElements\n");
+}
+
+TEST_F(RegionSceneTest, OverlappingRegionsOfOneBodyAreAnError) {
+  std::ofstream(dir / "over.msh") << overlapping_regions();
+  const std::string bone = R"({"bodies": [
+    {"name": "bone", "mesh": {"file": "over.msh", "regions": ["bone"]}, "rigid": true},
+    {"name": "soft", "mesh": {"file": "over.msh", "regions": ["soft"], "translate": [5, 0, 0]},
+     "material": {"model": "neo_hookean", "mu": 1, "lambda": 1}}],
+    "boundary": [{"type": "fixed", "nodes": {"set": "base plate"}}]})";
+  EXPECT_EQ(error(bone), "");
+  // Both regions in one body, named or by taking the whole file.
+  const std::string both = R"({"bodies": [
+    {"name": "both", "mesh": {"file": "over.msh", "regions": ["soft", "bone"]},
+     "materials": {"soft": {"model": "neo_hookean", "mu": 1, "lambda": 1},
+                   "bone": {"model": "neo_hookean", "mu": 100, "lambda": 100}}}],
+    "boundary": [{"type": "fixed", "nodes": {"set": "base plate"}}]})";
+  for (const std::string& scene : {both, replaced(both, R"(, "regions": ["soft", "bone"])", "")}) {
+    const std::string m = error(scene);
+    EXPECT_NE(m.find("scene.json: bodies[0].mesh: "), std::string::npos) << m;
+    EXPECT_NE(m.find("over.msh:28: element 49 (line 28) overlaps element 3 (line 26): the space "
+                     "just inside its boundary face"),
+              std::string::npos)
+        << m;
+  }
+}
+
+TEST_F(RegionSceneTest, NodeSetNamesThatTheResultsFileStoresAsOneAreAnError) {
+  // Each file alone is fine; a body of each makes "base/plate" and "base_plate", which the
+  // results file would store under one name.
+  std::ofstream(dir / "slash.msh")
+      << replaced(testing::kTwoRegionMsh, "\"base plate\"", "\"base/plate\"");
+  std::ofstream(dir / "under.msh")
+      << replaced(testing::kTwoRegionMsh, "\"base plate\"", "\"base_plate\"");
+  const std::string m = error(R"({"bodies": [
+    {"name": "a", "mesh": {"file": "slash.msh", "regions": ["soft"]}, "rigid": true},
+    {"name": "b", "mesh": {"file": "under.msh", "regions": ["soft"], "translate": [5, 0, 0]},
+     "rigid": true}],
+    "boundary": [{"type": "fixed", "nodes": {"body": "a"}}]})");
+  EXPECT_NE(m.find("scene.json: bodies[1].mesh: "), std::string::npos) << m;
+  EXPECT_NE(m.find("under.msh: node set 'base_plate' and node set 'base/plate' of an earlier body "
+                   "would be stored as the same 'base_plate' in the results file"),
+            std::string::npos)
+      << m;
+}
+
 }  // namespace
 }  // namespace depthfem

@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
+#include <iomanip>
 #include <random>
 #include <sstream>
 #include <string>
@@ -11,7 +12,9 @@
 
 #include "core/error.hpp"
 #include "core/gmsh_reader.hpp"
+#include "core/mesh_edits.hpp"
 #include "core/mesh_file.hpp"
+#include "core/mesh_regions.hpp"
 #include "core/obj_reader.hpp"
 #include "core/tetgen_reader.hpp"
 #include "core/two_region_msh.hpp"
@@ -423,9 +426,9 @@ TEST_F(ReadersTest, GmshWrongNumberOfTetNodesIsAnError) {
 TEST_F(ReadersTest, GmshDegenerateTetIsAnError) {
   const std::string file =
       write("flat.msh", replace_line(kMsh22, 14, std::string("9 ") + kFlatNode4));
-  // validate_and_orient names the tet by its position among the kept tets (1) and the file line.
-  EXPECT_TRUE(
-      throws_input_error([&] { read_gmsh(file); }, {"flat.msh:22:", "element 1 is degenerate"}));
+  // validate_and_orient names the tet by its element tag (5, not its position 1) and line.
+  EXPECT_TRUE(throws_input_error([&] { read_gmsh(file); },
+                                 {"flat.msh:22:", "element 5 (line 22) is degenerate"}));
 }
 
 TEST_F(ReadersTest, GmshQuadraticTetIsAnError) {
@@ -636,8 +639,9 @@ TEST_F(ReadersTest, TetgenMissingValueIsAnError) {
 TEST_F(ReadersTest, TetgenDegenerateTetIsAnError) {
   write("flat.node", replace_line(kTetgenNode1, 6, std::string("5 ") + kFlatNode4));
   write("flat.ele", kTetgenEle1);
+  // Named by its number in the 1-based .ele file (2), not its position (1).
   EXPECT_TRUE(throws_input_error([&] { read_tetgen(path("flat")); },
-                                 {"flat.ele:4:", "element 1 is degenerate"}));
+                                 {"flat.ele:4:", "element 2 (line 4) is degenerate"}));
 }
 
 TEST_F(ReadersTest, TetgenQuadraticTetIsAnError) {
@@ -821,13 +825,13 @@ TEST_F(ReadersTest, ReadTetMeshExplainsThatObjIsASurface) {
 // ---- Checks every reader shares (validate_and_orient) ------------------------------------------
 
 TEST_F(ReadersTest, TetListedTwiceIsAnError) {
-  // Element 5 (line 23) repeats element 4 (line 22) with its nodes in another order.
+  // Element 6 (line 23) repeats element 4 (line 21) with its nodes in another order.
   const std::string file =
       write("twice.msh", replace_line(replace_line(kMsh22, 17, "6"), 22,
                                       "5 4 2 1 1 7 300 12 9\n6 4 2 1 1 12 50 300 7"));
   EXPECT_TRUE(throws_input_error(
       [&] { read_gmsh(file); },
-      {"twice.msh:23:", "element 2 (line 23) repeats the nodes of element 0 (line 21)"}));
+      {"twice.msh:23:", "element 6 (line 23) repeats the nodes of element 4 (line 21)"}));
 }
 
 TEST_F(ReadersTest, OverlappingTetsAreAnError) {
@@ -853,6 +857,168 @@ TEST_F(ReadersTest, NodeOfNoTetIsAnError) {
   write("stray.ele", "2 4 0\n0 0 1 2 3\n1 1 2 3 4\n");
   EXPECT_TRUE(throws_input_error([&] { read_tetgen(node); },
                                  {"stray.node:7:", "node 5 belongs to no element"}));
+}
+
+// ---- Tets overlapping without a shared face (check_no_overlap), in the file's numbering -------
+
+// MSH 2.2 text of `mesh`: node i has the tag 101 + i, tet t the tag tags[t]; tet t is on line
+// 9 + #nodes + t.
+std::string msh22(const TetMesh& mesh, const std::vector<long long>& tags) {
+  std::ostringstream out;
+  out << std::setprecision(17) << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n"
+      << mesh.X.rows() << "\n";
+  for (Index i = 0; i < mesh.X.rows(); ++i)
+    out << 101 + i << " " << mesh.X(i, 0) << " " << mesh.X(i, 1) << " " << mesh.X(i, 2) << "\n";
+  out << "$EndNodes\n$Elements\n" << mesh.tets.rows() << "\n";
+  for (Index t = 0; t < mesh.tets.rows(); ++t) {
+    out << tags[t] << " 4 2 0 1";
+    for (int k = 0; k < 4; ++k) out << " " << 101 + mesh.tets(t, k);
+    out << "\n";
+  }
+  out << "$EndElements\n";
+  return out.str();
+}
+
+// TetGen NAME.node and NAME.ele of `mesh`, numbered from 1 (tet t on line 2 + t).
+void write_tetgen(const std::string& base, const TetMesh& mesh) {
+  std::ofstream node(base + ".node"), ele(base + ".ele");
+  node << std::setprecision(17) << mesh.X.rows() << " 3 0 0\n";
+  for (Index i = 0; i < mesh.X.rows(); ++i)
+    node << i + 1 << " " << mesh.X(i, 0) << " " << mesh.X(i, 1) << " " << mesh.X(i, 2) << "\n";
+  ele << mesh.tets.rows() << " 4 0\n";
+  for (Index t = 0; t < mesh.tets.rows(); ++t) {
+    ele << t + 1;
+    for (int k = 0; k < 4; ++k) ele << " " << mesh.tets(t, k) + 1;
+    ele << "\n";
+  }
+}
+
+// Element tags 1..n-1 for a mesh's first tets and 57 for its last one, the tet added.
+std::vector<long long> tags_with_last(Index num_tets, long long last) {
+  std::vector<long long> tags;
+  for (Index t = 0; t + 1 < num_tets; ++t) tags.push_back(t + 1);
+  tags.push_back(last);
+  return tags;
+}
+
+// The 2 x 2 x 2 unit box (27 nodes, 48 tets) with one more tet on new nodes: inside the box
+// (in no face with another tet), or through its top face.
+TetMesh box_and_tet_inside() {
+  return testing::joined(testing::box(Vec3::Zero(), Vec3::Ones(), 2),
+                         testing::small_tet(Vec3(0.3, 0.2, 0.15), 0.05));
+}
+TetMesh box_and_tet_sticking_out() {
+  return testing::joined(testing::box(Vec3::Zero(), Vec3::Ones(), 2),
+                         testing::tet(Vec3(0.4, 0.4, 0.8), Vec3(0.6, 0.4, 0.8), Vec3(0.5, 0.6, 0.8),
+                                      Vec3(0.5, 0.5, 1.3)));
+}
+// The 3 x 3 x 3 unit box without its middle cell: a cavity.
+TetMesh box_with_cavity() {
+  return testing::without_tets_in(testing::box(Vec3::Zero(), Vec3::Ones(), 3),
+                                  Vec3::Constant(1.0 / 3), Vec3::Constant(2.0 / 3));
+}
+
+TEST_F(ReadersTest, GmshTetInsideOthersIsAnErrorNamedByItsTag) {
+  // The 49th tet, tag 57, on line 9 + 31 + 48 = 88; its nodes have the tags 128..131.
+  const std::string file = write("inside.msh", msh22(box_and_tet_inside(), tags_with_last(49, 57)));
+  EXPECT_TRUE(throws_input_error(
+      [&] { read_gmsh(file); },
+      {"inside.msh:88: element 57 (line 88) overlaps element ",
+       "the space just inside its boundary face (1", "is covered by 2 elements"}));
+}
+
+TEST_F(ReadersTest, GmshTetStickingOutIsAnErrorNamedByItsTag) {
+  const std::string file =
+      write("out.msh", msh22(box_and_tet_sticking_out(), tags_with_last(49, 57)));
+  EXPECT_TRUE(throws_input_error([&] { read_gmsh(file); },
+                                 {"out.msh:88: element 57 (line 88) overlaps element ", "cross"}));
+}
+
+TEST_F(ReadersTest, TetgenTetInsideOrStickingOutIsAnErrorNamedByItsNumber) {
+  // Numbered from 1: the 49th tet is tetrahedron 49, on line 50 of the .ele file.
+  write_tetgen(path("inside"), box_and_tet_inside());
+  EXPECT_TRUE(throws_input_error(
+      [&] { read_tetgen(path("inside")); },
+      {"inside.ele:50: element 49 (line 50) overlaps element ", "is covered by 2 elements"}));
+  write_tetgen(path("out"), box_and_tet_sticking_out());
+  EXPECT_TRUE(throws_input_error([&] { read_tetgen(path("out")); },
+                                 {"out.ele:50: element 49 (line 50) overlaps element ", "cross"}));
+}
+
+TEST_F(ReadersTest, MeshWithACavityIsAccepted) {
+  const TetMesh hollow = box_with_cavity();
+  const std::vector<long long> tags = tags_with_last(static_cast<Index>(hollow.tets.rows()), 999);
+  EXPECT_EQ(read_gmsh(write("hollow.msh", msh22(hollow, tags))).mesh.tets.rows(), 26 * 6);
+  write_tetgen(path("hollow"), hollow);
+  EXPECT_EQ(read_tetgen(path("hollow")).mesh.tets.rows(), 26 * 6);
+}
+
+TEST_F(ReadersTest, OverlappingRegionsAreCheckedWhenABodyTakesThemTogether) {
+  // Two physical volumes, each a valid body alone: the box (tag 1) and a tet inside it (tag 2).
+  std::string text = msh22(box_and_tet_inside(), tags_with_last(49, 57));
+  for (Index t = 0; t < 49; ++t) {
+    const std::string tag = std::to_string(t < 48 ? t + 1 : 57);
+    const size_t at = text.find("\n" + tag + " 4 2 0 1 ") + 1;
+    text.replace(at, tag.size() + 9, tag + " 4 2 " + (t < 48 ? "1" : "2") + " 1 ");
+  }
+  const LoadedMesh loaded = read_gmsh(write("regions.msh", text));
+  EXPECT_EQ(loaded.region_names, (std::vector<std::string>{"1", "2"}));
+  EXPECT_EQ(select_regions(loaded, {"1"}).mesh.tets.rows(), 48);
+  EXPECT_EQ(select_regions(loaded, {"2"}).mesh.tets.rows(), 1);
+  EXPECT_TRUE(throws_input_error(
+      [&] {
+        select_regions(loaded, {"1", "2"});
+      },
+      {"regions.msh:88: element 57 (line 88) overlaps element "}));
+}
+
+// ---- Physical groups whose node sets would be one -------------------------------------------
+
+TEST_F(ReadersTest, GmshSurfaceAndVolumeOfTheSameNameAreAnError) {
+  // "base plate" (surface 5) renamed "soft", the name of volume 1.
+  const std::string file =
+      write("same.msh", replace_line(testing::kTwoRegionMsh, 6, "2 5 \"soft\""));
+  EXPECT_TRUE(throws_input_error(
+      [&] { read_gmsh(file); },
+      {"same.msh:7: physical volume 'soft' (tag 1, line 7) and physical surface 'soft' (tag 5, "
+       "line 6) have the same name: the node set 'soft' would hold the nodes of both; rename "
+       "one"}));
+}
+
+TEST_F(ReadersTest, GmshUnnamedGroupsOfTheSameTagAreAnError) {
+  // Without $PhysicalNames, the triangle's surface 1 and the tets' volume 1 would both be "1".
+  std::string text = replace_line(testing::kTwoRegionMsh, 21, "2 2 2 1 1 50 7 300");
+  text = replace_line(text, 4, "$Comment");
+  text = replace_line(text, 9, "$EndComment");
+  const std::string file = write("unnamed.msh", text);
+  EXPECT_TRUE(throws_input_error(
+      [&] { read_gmsh(file); },
+      {"unnamed.msh:22: physical volume 1 (unnamed, line 22) and physical surface 1 (unnamed, line "
+       "21) have the same name: the node set '1' would hold the nodes of both; name them in "
+       "$PhysicalNames"}));
+}
+
+TEST_F(ReadersTest, GmshNamesStoredAsOneAreAnError) {
+  // "a/b" and "a_b": the results file writes '/' in a node set's name as '_'.
+  std::string text = replace_line(testing::kTwoRegionMsh, 7, "3 1 \"a/b\"");
+  text = replace_line(text, 8, "3 2 \"a_b\"");
+  const std::string file = write("stored.msh", text);
+  EXPECT_TRUE(throws_input_error(
+      [&] { read_gmsh(file); },
+      {"stored.msh:8: physical volume 'a_b' (tag 2, line 8) and physical volume 'a/b' (tag 1, "
+       "line 7) would be stored as the same node set 'a_b' in the results file"}));
+}
+
+TEST_F(ReadersTest, GmshPhysicalNameTwiceOrEmptyIsAnError) {
+  std::string text = replace_line(testing::kTwoRegionMsh, 8, "3 1 \"bone\"");
+  EXPECT_TRUE(
+      throws_input_error([&] { read_gmsh(write("twice.msh", text)); },
+                         {"twice.msh:8:",
+                          "physical group of dimension 3 and tag 1 is named a second time (first "
+                          "at line 7)"}));
+  text = replace_line(testing::kTwoRegionMsh, 6, "2 5 \"\"");
+  EXPECT_TRUE(throws_input_error([&] { read_gmsh(write("empty.msh", text)); },
+                                 {"empty.msh:6:", "physical name must not be empty"}));
 }
 
 }  // namespace
