@@ -17,7 +17,7 @@
 
 #include "apps/json_reader.hpp"
 #include "core/error.hpp"
-#include "core/lumped_mass.hpp"
+#include "core/mass.hpp"
 #include "core/mesh_file.hpp"
 #include "core/mesh_generators.hpp"
 #include "core/mesh_regions.hpp"

@@ -4,7 +4,7 @@
 
 #include "contact/material_depth.hpp"
 #include "contact/node_to_surface_contact.hpp"
-#include "core/lumped_mass.hpp"
+#include "core/mass.hpp"
 #include "integrators/consistent_mass.hpp"
 #include "integrators/gravity.hpp"
 #include "integrators/stiffness_tether.hpp"

@@ -10,7 +10,7 @@
 
 #include "contact/contact_surface.hpp"
 #include "contact/penalty.hpp"
-#include "core/lumped_mass.hpp"
+#include "core/mass.hpp"
 
 namespace depthfem {
 

@@ -1,34 +1,12 @@
 #include "integrators/consistent_mass.hpp"
 
-#include "core/tet_mesh.hpp"
+#include "core/mass.hpp"
 
 namespace depthfem {
 
-namespace {
-SparsityBuilder tet_cliques(const TetIndices& tets, Index num_nodes) {
-  SparsityBuilder builder(num_nodes);
-  for (Index t = 0; t < tets.rows(); ++t) {
-    const Index n[4] = {tets(t, 0), tets(t, 1), tets(t, 2), tets(t, 3)};
-    builder.add_clique(n);
-  }
-  return builder;
-}
-}  // namespace
-
 ConsistentMass::ConsistentMass(std::string name, const Points& X, const TetIndices& tets,
                                const VectorX& tet_density, double factor)
-    : name_(std::move(name)), tets_(tets), M_(tet_cliques(tets, static_cast<Index>(X.rows()))) {
-  for (Index t = 0; t < tets.rows(); ++t) {
-    const double volume =
-        signed_volume(X.row(tets(t, 0)).transpose(), X.row(tets(t, 1)).transpose(),
-                      X.row(tets(t, 2)).transpose(), X.row(tets(t, 3)).transpose());
-    const double m = factor * tet_density(t) * volume / 20;
-    for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b)
-        M_.add_block(M_.block_index(tets(t, a), tets(t, b)),
-                     Mat3((a == b ? 2 * m : m) * Mat3::Identity()));
-  }
-}
+    : name_(std::move(name)), tets_(tets), M_(consistent_mass(X, tets, tet_density, factor)) {}
 
 void ConsistentMass::add_couplings(SparsityBuilder& builder) const {
   for (Index t = 0; t < tets_.rows(); ++t) {

@@ -6,10 +6,9 @@
 
 namespace depthfem {
 
-/// E(x) = s / 2 (x - a)^T M (x - a) with the consistent mass matrix of linear tets, M_ab =
-/// rho V / 20 (1 + delta_ab) I per tet corner pair (the integral of rho N_a N_b), times a factor
-/// (1 for inertia, alpha for Rayleigh mass damping). Its rows sum to the lumped masses, so a
-/// uniform acceleration costs the same force with either matrix.
+/// E(x) = s / 2 (x - a)^T M (x - a) with the consistent mass matrix of linear tets
+/// (core/mass.hpp) times a factor (1 for inertia, alpha for Rayleigh mass damping). Its rows sum
+/// to the lumped masses, so a uniform acceleration costs the same force with either matrix.
 class ConsistentMass final : public Tether {
  public:
   /// `tet_density` [kg/m^3] per tet; `factor` scales M.

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "core/lumped_mass.hpp"
+#include "core/mass.hpp"
 
 namespace depthfem {
 

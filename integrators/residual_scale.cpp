@@ -1,6 +1,6 @@
 #include "integrators/residual_scale.hpp"
 
-#include "core/lumped_mass.hpp"
+#include "core/mass.hpp"
 #include "materials/material.hpp"
 
 namespace depthfem {

@@ -7,7 +7,7 @@
 #include <fstream>
 
 #include "apps/scene_runner.hpp"
-#include "core/lumped_mass.hpp"
+#include "core/mass.hpp"
 #include "core/results_file.hpp"
 
 namespace depthfem {

@@ -11,7 +11,7 @@
 
 #include "apps/scene_runner.hpp"
 #include "core/error.hpp"
-#include "core/lumped_mass.hpp"
+#include "core/mass.hpp"
 #include "core/results_file.hpp"
 
 namespace depthfem {

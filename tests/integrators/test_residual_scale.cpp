@@ -2,7 +2,7 @@
 // around it, not against the stiffest material of the scene.
 #include <gtest/gtest.h>
 
-#include "core/lumped_mass.hpp"
+#include "core/mass.hpp"
 #include "integrators/newton.hpp"
 #include "integrators/residual_scale.hpp"
 

@@ -7,7 +7,7 @@
 #include <numeric>
 
 #include "contact/obstacle_contact.hpp"
-#include "core/lumped_mass.hpp"
+#include "core/mass.hpp"
 #include "core/mesh_generators.hpp"
 #include "integrators/arkode_stepper.hpp"
 #include "integrators/elasticity.hpp"

@@ -5,7 +5,7 @@
 #include <numeric>
 #include <random>
 
-#include "core/lumped_mass.hpp"
+#include "core/mass.hpp"
 #include "core/mesh_generators.hpp"
 #include "finite_differences.hpp"
 #include "integrators/consistent_mass.hpp"

@@ -1,4 +1,4 @@
-#include "core/lumped_mass.hpp"
+#include "core/mass.hpp"
 
 #include "core/tet_mesh.hpp"
 
@@ -17,6 +17,24 @@ VectorX lumped_mass(const Points& X, const TetIndices& tets, const VectorX& dens
     for (int a = 0; a < 4; ++a) m(tets(t, a)) += quarter;
   }
   return m;
+}
+
+BlockSparseMatrix consistent_mass(const Points& X, const TetIndices& tets, const VectorX& density,
+                                  double factor) {
+  SparsityBuilder cliques(static_cast<Index>(X.rows()));
+  for (Index t = 0; t < tets.rows(); ++t) {
+    const Index n[4] = {tets(t, 0), tets(t, 1), tets(t, 2), tets(t, 3)};
+    cliques.add_clique(n);
+  }
+  BlockSparseMatrix M(cliques);
+  for (Index t = 0; t < tets.rows(); ++t) {
+    const double m = factor * density(t) * tet_volume(X, tets, t) / 20;
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b)
+        M.add_block(M.block_index(tets(t, a), tets(t, b)),
+                    Mat3((a == b ? 2 * m : m) * Mat3::Identity()));
+  }
+  return M;
 }
 
 VectorX node_volume(const Points& X, const TetIndices& tets) {
