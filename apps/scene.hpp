@@ -8,7 +8,7 @@
 #include "contact/material_depth_contact.hpp"
 #include "contact/obstacle_contact.hpp"
 #include "core/mesh.hpp"
-#include "core/xdmf_writer.hpp"
+#include "core/results_file.hpp"
 #include "integrators/constraints.hpp"
 #include "integrators/dynamics.hpp"
 #include "integrators/elasticity.hpp"

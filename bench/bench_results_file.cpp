@@ -16,6 +16,7 @@
 
 #include "core/mesh_generators.hpp"
 #include "core/results_file.hpp"
+#include "core/xdmf_writer.hpp"
 #include "integrators/element_fields.hpp"
 #include "integrators/system.hpp"
 

@@ -16,6 +16,7 @@
 #include "core/error.hpp"
 #include "core/exclusive_file.hpp"
 #include "core/hdf5_file.hpp"
+#include "core/xdmf_writer.hpp"
 
 namespace depthfem {
 namespace {

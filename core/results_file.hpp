@@ -42,13 +42,21 @@
 
 #include "core/mesh.hpp"
 #include "core/step_record.hpp"
-#include "core/xdmf_writer.hpp"
 
 namespace depthfem {
 
 /// The most steps a results file holds: a bound that keeps a mistaken time step from writing
 /// without end (the scene reader refuses a run that asks for more).
 inline constexpr Index kMaxSteps = 1000000;
+
+/// Which per-step fields a results file holds, fixed when it is created.
+struct ResultFields {
+  bool velocity = false;     ///< v (time-dependent analyses)
+  bool displacement = true;  ///< x - X
+  bool stress = false;       ///< Cauchy stress and von Mises stress per tet
+  bool strain = false;       ///< logarithmic strain and volume ratio per tet
+  bool contact = false;      ///< pressure, traction, gap and contact fraction per boundary triangle
+};
 
 /// Metadata of a run written to /run at creation, and what its steps will hold.
 struct RunInfo {

@@ -9,18 +9,10 @@
 #include <vector>
 
 #include "core/exclusive_file.hpp"
+#include "core/results_file.hpp"
 #include "core/types.hpp"
 
 namespace depthfem {
-
-/// Which per-step fields a results file holds, fixed when it is created.
-struct ResultFields {
-  bool velocity = false;     ///< v (time-dependent analyses)
-  bool displacement = true;  ///< x - X
-  bool stress = false;       ///< Cauchy stress and von Mises stress per tet
-  bool strain = false;       ///< logarithmic strain and volume ratio per tet
-  bool contact = false;      ///< pressure, traction, gap and contact fraction per boundary triangle
-};
 
 /// One tetrahedral block of the sidecar: a body, or an element region of a body (with the body's
 /// nodes): a contiguous range of the scene's nodes and one of its tets.
