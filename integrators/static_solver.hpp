@@ -39,10 +39,30 @@ class StaticSolver {
   void run(Points& x, double start_load = 0);
 
  private:
+  /// The last converged load factor, and the one before with its solution: the predictor's
+  /// second point.
+  struct Path {
+    double load, previous_load;
+    Points previous;
+  };
+  /// Adaptive incremental loading from path.load to 1 (LOOP1).
+  void load_to_one(Points& x, Path& path);
+  /// Quasi-viscous steps at full load until the body is at rest.
+  void settle(Points& x, Path& path);
+  /// One attempt at load factor `target` from the converged x: predictor, legal start, Newton;
+  /// on success x and `path` move to it and the step is completed. False (last_failure_ says
+  /// why) when it does not converge.
+  bool attempt(Points& x, Path& path, double target, bool settling);
+  /// Makes `trial` (prepared) a legal configuration to start Newton from at `target`: as it is,
+  /// else the prescribed motion carried into the body by the stiffness at x, else the prescribed
+  /// motion alone. False when all three invert a tet.
+  bool legal_start(const Points& x, double target, Points& trial);
+
   StepLifecycle& lifecycle_;
   NodalSpring* viscosity_;
   StaticOptions options_;
   NewtonSolver newton_;
+  std::string last_failure_;  ///< why the last attempt failed
 };
 
 }  // namespace depthfem
