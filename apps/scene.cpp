@@ -653,6 +653,162 @@ void set_newton_test(JsonObject& r, Scene& scene, const std::vector<std::string>
   r.fail("solver.tolerance", why);
 }
 
+// A body as the scene file gives it, read and checked before any mesh is made.
+struct BodySpec {
+  JsonObject where;
+  std::string name;
+  MeshSpec mesh;
+  JsonObject mesh_where;
+  bool rigid;
+  std::vector<BodyMaterial> materials;  // deformable bodies
+  double density;
+  Vec3 velocity;
+};
+
+// Every entry of "bodies"; the mesh files they read join scene.inputs.
+std::vector<BodySpec> read_bodies(JsonObject& r, const std::string& dir, Scene& scene) {
+  std::vector<BodySpec> bodies;
+  MeshCounts counts;
+  for (JsonObject b : r.objects("bodies")) {
+    const std::string name = b.string("name");
+    for (const BodySpec& existing : bodies)
+      if (existing.name == name) b.fail("name", "duplicate body name '" + name + "'");
+    const JsonObject mesh_where = b.object("mesh");
+    BodySpec body{.where = b,
+                  .name = name,
+                  .mesh = read_mesh_spec(mesh_where, dir, counts),
+                  .mesh_where = mesh_where,
+                  .rigid = b.boolean("rigid", false),
+                  .materials = {},
+                  .density = 0,
+                  .velocity = Vec3::Zero()};
+    if (body.rigid) {
+      for (const char* key : {"material", "materials"})
+        if (b.has(key)) b.fail(key, "a rigid body takes no material");
+    } else {
+      if (b.has("materials") && !std::holds_alternative<std::string>(body.mesh.source))
+        b.fail("materials", "the body's mesh has no regions (physical volumes); use material");
+      body.materials = read_body_materials(b);
+    }
+    body.density = b.number("density", 1000.0);
+    if (!(body.density > 0)) b.fail("density", "must be > 0");
+    body.velocity = b.vec3("velocity", Vec3::Zero());
+    b.finish();
+    if (const auto* file = std::get_if<std::string>(&body.mesh.source)) {
+      std::filesystem::path p(*file);
+      scene.inputs.push_back(*file);
+      if (p.extension() == ".node" || p.extension() == ".ele") {  // a TetGen mesh is two files
+        scene.inputs.push_back(p.replace_extension(".node").string());
+        scene.inputs.push_back(p.replace_extension(".ele").string());
+      }
+    }
+    bodies.push_back(std::move(body));
+  }
+  if (bodies.empty()) r.fail("bodies", "a scene needs at least one body");
+  check_sizes(r, counts);
+  return bodies;
+}
+
+// The sections after the bodies: boundary (returned, its node selections resolved once the
+// meshes exist), contact, obstacles, solver, output, dynamic.
+std::vector<ConstraintSpec> read_sections(JsonObject& r, Scene& scene) {
+  std::vector<ConstraintSpec> boundary;
+  if (r.has("boundary")) {
+    std::vector<JsonObject> list = r.objects("boundary");
+    for (size_t k = 0; k < list.size(); ++k) boundary.push_back(read_constraint(list[k], k));
+  }
+  if (r.has("contact")) read_contact(r.object("contact"), scene);
+  if (r.has("obstacles")) {
+    std::vector<JsonObject> list = r.objects("obstacles");
+    for (size_t k = 0; k < list.size(); ++k) scene.obstacles.push_back(read_obstacle(list[k], k));
+  }
+  if (r.has("solver")) read_solver(r.object("solver"), scene);
+  if (r.has("output")) {
+    JsonObject o = r.object("output");
+    scene.output.displacement = o.boolean("displacement", true);
+    scene.output.stress = o.boolean("stress", false);
+    scene.output.strain = o.boolean("strain", false);
+    scene.output.contact = o.boolean("contact", true);
+    o.finish();
+  }
+  if (r.has("dynamic")) {
+    if (scene.analysis == Analysis::kStatic)
+      r.fail("dynamic", "only for a dynamic or quasistatic analysis");
+    read_dynamic(r.object("dynamic"), scene);
+  } else if (scene.analysis != Analysis::kStatic) {
+    r.fail("dynamic",
+           "missing required key for a " + std::string(to_string(scene.analysis)) + " analysis");
+  }
+  scene.dynamic_options.newton = scene.static_options.newton;
+  return boundary;
+}
+
+// The results file stores a node set under stored_set_name: two names of different bodies'
+// meshes must not become one there (a name they share is one set, holding the nodes of each).
+void check_stored_set_names(const BodySpec& b, const LoadedMesh& loaded, const Mesh& mesh) {
+  for (const auto& [set, nodes] : loaded.node_sets) {
+    for (const auto& [earlier, earlier_nodes] : mesh.node_sets) {
+      if (earlier != set && stored_set_name(earlier) == stored_set_name(set)) {
+        b.mesh_where.fail("", loaded.source.file + ": node set '" + set + "' and node set '" +
+                                  earlier + "' of an earlier body would be stored as the same '" +
+                                  stored_set_name(set) +
+                                  "' in the results file ('/' becomes '_'); rename one");
+      }
+    }
+  }
+}
+
+// Makes the body's mesh and adds it to the scene: a rigid body as a fixed constraint, a
+// deformable one as a material group per region (their material paths join `material_paths`);
+// its density per tet and velocity per node join the lists.
+void add_body(const BodySpec& b, Scene& scene, std::vector<std::string>& material_paths,
+              std::vector<double>& density, std::vector<Vec3>& velocity) {
+  const LoadedMesh loaded = make_mesh(b.mesh, b.mesh_where);
+  check_stored_set_names(b, loaded, scene.mesh);
+  const Index id = scene.mesh.add_body(b.name, loaded.mesh, loaded.node_sets, loaded.region_names,
+                                       loaded.tet_region);
+  Body& body = scene.mesh.bodies[id];
+  body.rigid = b.rigid;
+  if (b.rigid) {
+    // No unknowns: held in place unless a boundary condition on the body moves it.
+    std::vector<Index> nodes(static_cast<size_t>(body.num_nodes));
+    for (Index k = 0; k < body.num_nodes; ++k) nodes[k] = body.first_node + k;
+    scene.constraints.push_back({b.name + "_rigid", nodes, Fixed{}});
+  } else {
+    for (const BodyMaterial& m : region_materials_checked(b.materials, loaded, b.where)) {
+      // The whole body, or the region's range of its tets (add_body grouped them by region;
+      // a region without tets has none).
+      Region tets{"", body.first_tet, body.num_tets};
+      if (!m.region.empty()) {
+        const auto it = std::ranges::find(body.regions, m.region, &Region::name);
+        tets = it != body.regions.end() ? *it : Region{};
+      }
+      ElasticGroup g{m.model, {}, Points()};
+      for (Index t = 0; t < tets.num_tets; ++t) g.tets.push_back(tets.first_tet + t);
+      if (material_uses_fiber(g.material))
+        g.fibers = m.fiber.transpose().replicate(static_cast<Index>(g.tets.size()), 1);
+      scene.groups.push_back(std::move(g));
+      material_paths.push_back(m.path);
+    }
+  }
+  velocity.insert(velocity.end(), static_cast<size_t>(body.num_nodes), b.velocity);
+  density.insert(density.end(), static_cast<size_t>(body.num_tets), b.density);
+}
+
+// The boundary conditions on the scene's nodes, checked for conditions that contradict each
+// other on a node.
+void add_boundary(JsonObject& r, std::vector<ConstraintSpec>& boundary, Scene& scene) {
+  for (ConstraintSpec& c : boundary) {
+    c.constraint.nodes = select_nodes(c.nodes, scene.mesh);
+    scene.constraints.push_back(std::move(c.constraint));
+  }
+  try {
+    [[maybe_unused]] const Constraints constraints(scene.mesh.X, scene.constraints);
+  } catch (const InputError& e) {
+    r.fail("boundary", e.what());
+  }
+}
+
 }  // namespace
 
 const char* to_string(Analysis analysis) {
@@ -692,149 +848,22 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
                           {to_string(Analysis::kDynamic), Analysis::kDynamic},
                           {to_string(Analysis::kQuasistatic), Analysis::kQuasistatic}});
   scene.gravity = r.vec3("gravity", Vec3::Zero());
-
-  struct BodySpec {
-    JsonObject where;
-    std::string name;
-    MeshSpec mesh;
-    JsonObject mesh_where;
-    bool rigid;
-    std::vector<BodyMaterial> materials;  // deformable bodies
-    double density;
-    Vec3 velocity;
-  };
-  const std::string dir = std::filesystem::path(path).parent_path().string();
-  std::vector<BodySpec> bodies;
-  std::vector<std::string> material_paths;  // of the deformable bodies, in order
-  MeshCounts counts;
-  for (JsonObject b : r.objects("bodies")) {
-    const std::string name = b.string("name");
-    for (const BodySpec& existing : bodies)
-      if (existing.name == name) b.fail("name", "duplicate body name '" + name + "'");
-    const JsonObject mesh_where = b.object("mesh");
-    BodySpec body{b,
-                  name,
-                  read_mesh_spec(mesh_where, dir, counts),
-                  mesh_where,
-                  b.boolean("rigid", false),
-                  {},
-                  0,
-                  Vec3::Zero()};
-    if (body.rigid) {
-      for (const char* key : {"material", "materials"})
-        if (b.has(key)) b.fail(key, "a rigid body takes no material");
-    } else {
-      if (b.has("materials") && !std::holds_alternative<std::string>(body.mesh.source))
-        b.fail("materials", "the body's mesh has no regions (physical volumes); use material");
-      body.materials = read_body_materials(b);
-    }
-    body.density = b.number("density", 1000.0);
-    if (!(body.density > 0)) b.fail("density", "must be > 0");
-    body.velocity = b.vec3("velocity", Vec3::Zero());
-    b.finish();
-    if (const auto* file = std::get_if<std::string>(&body.mesh.source)) {
-      std::filesystem::path p(*file);
-      scene.inputs.push_back(*file);
-      if (p.extension() == ".node" || p.extension() == ".ele") {  // a TetGen mesh is two files
-        scene.inputs.push_back(p.replace_extension(".node").string());
-        scene.inputs.push_back(p.replace_extension(".ele").string());
-      }
-    }
-    bodies.push_back(std::move(body));
-  }
-  if (bodies.empty()) r.fail("bodies", "a scene needs at least one body");
-  check_sizes(r, counts);
-
-  std::vector<ConstraintSpec> boundary;
-  if (r.has("boundary")) {
-    std::vector<JsonObject> list = r.objects("boundary");
-    for (size_t k = 0; k < list.size(); ++k) boundary.push_back(read_constraint(list[k], k));
-  }
-  if (r.has("contact")) read_contact(r.object("contact"), scene);
-  if (r.has("obstacles")) {
-    std::vector<JsonObject> list = r.objects("obstacles");
-    for (size_t k = 0; k < list.size(); ++k) scene.obstacles.push_back(read_obstacle(list[k], k));
-  }
-  if (r.has("solver")) read_solver(r.object("solver"), scene);
-  if (r.has("output")) {
-    JsonObject o = r.object("output");
-    scene.output.displacement = o.boolean("displacement", true);
-    scene.output.stress = o.boolean("stress", false);
-    scene.output.strain = o.boolean("strain", false);
-    scene.output.contact = o.boolean("contact", true);
-    o.finish();
-  }
-  if (r.has("dynamic")) {
-    if (scene.analysis == Analysis::kStatic)
-      r.fail("dynamic", "only for a dynamic or quasistatic analysis");
-    read_dynamic(r.object("dynamic"), scene);
-  } else if (scene.analysis != Analysis::kStatic) {
-    r.fail("dynamic",
-           "missing required key for a " + std::string(to_string(scene.analysis)) + " analysis");
-  }
-  scene.dynamic_options.newton = scene.static_options.newton;
+  const std::vector<BodySpec> bodies =
+      read_bodies(r, std::filesystem::path(path).parent_path().string(), scene);
+  std::vector<ConstraintSpec> boundary = read_sections(r, scene);
   r.finish();
 
   // Then the meshes, and what depends on them.
+  std::vector<std::string> material_paths;  // of the deformable bodies' groups, in order
   std::vector<double> density;
   std::vector<Vec3> velocity;
-  for (const BodySpec& b : bodies) {
-    const LoadedMesh loaded = make_mesh(b.mesh, b.mesh_where);
-    // The results file stores a node set under stored_set_name: two names of different bodies'
-    // meshes must not become one there (a name they share is one set, holding the nodes of each).
-    for (const auto& [set, nodes] : loaded.node_sets) {
-      for (const auto& [earlier, earlier_nodes] : scene.mesh.node_sets) {
-        if (earlier != set && stored_set_name(earlier) == stored_set_name(set)) {
-          b.mesh_where.fail("", loaded.source.file + ": node set '" + set + "' and node set '" +
-                                    earlier + "' of an earlier body would be stored as the same '" +
-                                    stored_set_name(set) +
-                                    "' in the results file ('/' becomes '_'); rename one");
-        }
-      }
-    }
-    const Index id = scene.mesh.add_body(b.name, loaded.mesh, loaded.node_sets, loaded.region_names,
-                                         loaded.tet_region);
-    Body& body = scene.mesh.bodies[id];
-    body.rigid = b.rigid;
-    if (b.rigid) {
-      // No unknowns: held in place unless a boundary condition on the body moves it.
-      std::vector<Index> nodes(static_cast<size_t>(body.num_nodes));
-      for (Index k = 0; k < body.num_nodes; ++k) nodes[k] = body.first_node + k;
-      scene.constraints.push_back({b.name + "_rigid", nodes, Fixed{}});
-    } else {
-      for (const BodyMaterial& m : region_materials_checked(b.materials, loaded, b.where)) {
-        // The whole body, or the region's range of its tets (add_body grouped them by region;
-        // a region without tets has none).
-        Region tets{"", body.first_tet, body.num_tets};
-        if (!m.region.empty()) {
-          const auto it = std::ranges::find(body.regions, m.region, &Region::name);
-          tets = it != body.regions.end() ? *it : Region{};
-        }
-        ElasticGroup g{m.model, {}, Points()};
-        for (Index t = 0; t < tets.num_tets; ++t) g.tets.push_back(tets.first_tet + t);
-        if (material_uses_fiber(g.material))
-          g.fibers = m.fiber.transpose().replicate(static_cast<Index>(g.tets.size()), 1);
-        scene.groups.push_back(std::move(g));
-        material_paths.push_back(m.path);
-      }
-    }
-    velocity.insert(velocity.end(), static_cast<size_t>(body.num_nodes), b.velocity);
-    density.insert(density.end(), static_cast<size_t>(body.num_tets), b.density);
-  }
+  for (const BodySpec& b : bodies) add_body(b, scene, material_paths, density, velocity);
   scene.initial_velocity.resize(scene.mesh.num_nodes(), 3);
   for (Index i = 0; i < scene.mesh.num_nodes(); ++i)
     scene.initial_velocity.row(i) = velocity[i].transpose();
   scene.tet_density =
       Eigen::Map<VectorX>(density.data(), static_cast<Eigen::Index>(density.size()));
-  for (ConstraintSpec& c : boundary) {
-    c.constraint.nodes = select_nodes(c.nodes, scene.mesh);
-    scene.constraints.push_back(std::move(c.constraint));
-  }
-  try {  // conditions that contradict each other on a node
-    [[maybe_unused]] const Constraints constraints(scene.mesh.X, scene.constraints);
-  } catch (const InputError& e) {
-    r.fail("boundary", e.what());
-  }
+  add_boundary(r, boundary, scene);
   set_newton_test(r, scene, material_paths);
   return scene;
 }
