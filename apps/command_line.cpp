@@ -9,7 +9,7 @@
 #include "apps/run_scene.hpp"
 #include "core/error.hpp"
 #include "core/results_file.hpp"
-#include "integrators/thread_budget.hpp"
+#include "integrators/solvers/thread_budget.hpp"
 
 namespace depthfem {
 

@@ -13,12 +13,12 @@
 #include "contact/penetration_depth.hpp"
 #include "core/error.hpp"
 #include "core/results_file.hpp"
-#include "integrators/arkode_stepper.hpp"
-#include "integrators/element_fields.hpp"
-#include "integrators/implicit_stepper.hpp"
-#include "integrators/static_solver.hpp"
-#include "integrators/symplectic_euler.hpp"
-#include "integrators/thread_budget.hpp"
+#include "integrators/elements/element_fields.hpp"
+#include "integrators/solvers/arkode_stepper.hpp"
+#include "integrators/solvers/implicit_stepper.hpp"
+#include "integrators/solvers/static_solver.hpp"
+#include "integrators/solvers/symplectic_euler.hpp"
+#include "integrators/solvers/thread_budget.hpp"
 
 namespace depthfem {
 

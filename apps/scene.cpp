@@ -24,7 +24,7 @@
 #include "core/node_sets.hpp"
 #include "core/overlap_check.hpp"
 #include "core/results_file.hpp"
-#include "integrators/residual_scale.hpp"
+#include "integrators/solvers/residual_scale.hpp"
 
 namespace depthfem {
 

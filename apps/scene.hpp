@@ -9,10 +9,10 @@
 #include "contact/obstacle_contact.hpp"
 #include "core/mesh.hpp"
 #include "core/results_file.hpp"
-#include "integrators/constraints.hpp"
-#include "integrators/dynamics.hpp"
-#include "integrators/elasticity.hpp"
-#include "integrators/static_solver.hpp"
+#include "integrators/forces/constraints.hpp"
+#include "integrators/forces/elasticity.hpp"
+#include "integrators/solvers/dynamics.hpp"
+#include "integrators/solvers/static_solver.hpp"
 
 namespace depthfem {
 

@@ -5,9 +5,9 @@
 #include "contact/material_depth.hpp"
 #include "contact/node_to_surface_contact.hpp"
 #include "core/mass.hpp"
-#include "integrators/consistent_mass.hpp"
-#include "integrators/gravity.hpp"
-#include "integrators/stiffness_tether.hpp"
+#include "integrators/forces/consistent_mass.hpp"
+#include "integrators/forces/gravity.hpp"
+#include "integrators/forces/stiffness_tether.hpp"
 
 namespace depthfem {
 

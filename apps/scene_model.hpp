@@ -6,8 +6,8 @@
 
 #include "apps/scene.hpp"
 #include "contact/material_depth_contact.hpp"
-#include "integrators/implicit_stepper.hpp"
-#include "integrators/step_lifecycle.hpp"
+#include "integrators/solvers/implicit_stepper.hpp"
+#include "integrators/solvers/step_lifecycle.hpp"
 
 namespace depthfem {
 

@@ -31,8 +31,8 @@
 
 #include "core/block_sparse_matrix.hpp"
 #include "core/mesh_generators.hpp"
-#include "integrators/elasticity.hpp"
-#include "integrators/tet_inputs.hpp"
+#include "integrators/elements/tet_inputs.hpp"
+#include "integrators/forces/elasticity.hpp"
 
 namespace depthfem {
 namespace {

@@ -24,8 +24,8 @@
 
 #include "apps/scene_model.hpp"
 #include "core/error.hpp"
-#include "integrators/static_solver.hpp"
-#include "integrators/thread_budget.hpp"
+#include "integrators/solvers/static_solver.hpp"
+#include "integrators/solvers/thread_budget.hpp"
 
 using namespace depthfem;
 

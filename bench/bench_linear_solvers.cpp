@@ -16,11 +16,11 @@
 #include <numeric>
 
 #include "core/mesh_generators.hpp"
-#include "integrators/amg_solver.hpp"
-#include "integrators/constraints.hpp"
-#include "integrators/direct_solver.hpp"
-#include "integrators/elasticity.hpp"
-#include "integrators/thread_budget.hpp"
+#include "integrators/forces/constraints.hpp"
+#include "integrators/forces/elasticity.hpp"
+#include "integrators/solvers/amg_solver.hpp"
+#include "integrators/solvers/direct_solver.hpp"
+#include "integrators/solvers/thread_budget.hpp"
 
 namespace depthfem {
 namespace {

@@ -17,8 +17,8 @@
 #include "core/mesh_generators.hpp"
 #include "core/results_file.hpp"
 #include "core/xdmf_writer.hpp"
-#include "integrators/element_fields.hpp"
-#include "integrators/system.hpp"
+#include "integrators/elements/element_fields.hpp"
+#include "integrators/forces/system.hpp"
 
 namespace depthfem {
 namespace {

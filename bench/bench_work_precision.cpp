@@ -20,7 +20,7 @@
 
 #include "apps/run_scene.hpp"
 #include "core/error.hpp"
-#include "integrators/symplectic_euler.hpp"
+#include "integrators/solvers/symplectic_euler.hpp"
 
 using namespace depthfem;
 

@@ -1,7 +1,7 @@
 #pragma once
 /// The mass of linear tets, in one place: lumped (diagonal) and consistent mass, and per-node
 /// size measures of a tet mesh. The force modules that turn mass into inertia and damping
-/// (integrators/nodal_spring.hpp, integrators/consistent_mass.hpp) take it from here.
+/// (integrators/forces/nodal_spring.hpp, integrators/forces/consistent_mass.hpp) take it from here.
 
 #include "core/block_sparse_matrix.hpp"
 #include "core/types.hpp"

@@ -5,7 +5,7 @@
 #include <random>
 
 #include "core/types.hpp"
-#include "integrators/batched_tet_kernel.hpp"
+#include "integrators/elements/batched_tet_kernel.hpp"
 #include "materials/all_models.hpp"
 #include "materials/material.hpp"
 

@@ -4,7 +4,7 @@
 #include <numbers>
 
 #include "core/error.hpp"
-#include "integrators/constraints.hpp"
+#include "integrators/forces/constraints.hpp"
 
 namespace depthfem {
 namespace {

@@ -11,9 +11,9 @@
 #include "core/error.hpp"
 #include "core/mesh_generators.hpp"
 #include "finite_differences.hpp"
-#include "integrators/elasticity.hpp"
-#include "integrators/psd_projection.hpp"
-#include "integrators/tet_kernel.hpp"
+#include "integrators/elements/psd_projection.hpp"
+#include "integrators/elements/tet_kernel.hpp"
+#include "integrators/forces/elasticity.hpp"
 #include "materials/all_models.hpp"
 #include "materials/lanes.hpp"
 

@@ -7,7 +7,7 @@
 #include <cmath>
 
 #include "core/mesh_generators.hpp"
-#include "integrators/element_fields.hpp"
+#include "integrators/elements/element_fields.hpp"
 #include "materials/closed_forms.hpp"
 
 namespace depthfem {

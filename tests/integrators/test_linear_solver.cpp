@@ -6,11 +6,11 @@
 #include <numeric>
 
 #include "core/mesh_generators.hpp"
-#include "integrators/amg_solver.hpp"
-#include "integrators/constraints.hpp"
-#include "integrators/direct_solver.hpp"
-#include "integrators/elasticity.hpp"
-#include "integrators/linear_solver.hpp"
+#include "integrators/forces/constraints.hpp"
+#include "integrators/forces/elasticity.hpp"
+#include "integrators/solvers/amg_solver.hpp"
+#include "integrators/solvers/direct_solver.hpp"
+#include "integrators/solvers/linear_solver.hpp"
 
 namespace depthfem {
 namespace {

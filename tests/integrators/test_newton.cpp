@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include "integrators/newton.hpp"
+#include "integrators/solvers/newton.hpp"
 
 namespace depthfem {
 namespace {

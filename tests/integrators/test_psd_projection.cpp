@@ -5,7 +5,7 @@
 #include <Eigen/Eigenvalues>
 #include <limits>
 
-#include "integrators/psd_projection.hpp"
+#include "integrators/elements/psd_projection.hpp"
 #include "materials/all_models.hpp"
 
 namespace depthfem {

@@ -3,8 +3,8 @@
 #include <gtest/gtest.h>
 
 #include "core/mass.hpp"
-#include "integrators/newton.hpp"
-#include "integrators/residual_scale.hpp"
+#include "integrators/solvers/newton.hpp"
+#include "integrators/solvers/residual_scale.hpp"
 
 namespace depthfem {
 namespace {

@@ -11,8 +11,8 @@
 #include <string>
 
 #include "core/error.hpp"
-#include "integrators/gravity.hpp"
-#include "integrators/static_solver.hpp"
+#include "integrators/forces/gravity.hpp"
+#include "integrators/solvers/static_solver.hpp"
 
 namespace depthfem {
 namespace {

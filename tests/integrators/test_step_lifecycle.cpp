@@ -9,11 +9,11 @@
 #include "contact/obstacle_contact.hpp"
 #include "core/mass.hpp"
 #include "core/mesh_generators.hpp"
-#include "integrators/arkode_stepper.hpp"
-#include "integrators/elasticity.hpp"
-#include "integrators/implicit_stepper.hpp"
-#include "integrators/static_solver.hpp"
-#include "integrators/symplectic_euler.hpp"
+#include "integrators/forces/elasticity.hpp"
+#include "integrators/solvers/arkode_stepper.hpp"
+#include "integrators/solvers/implicit_stepper.hpp"
+#include "integrators/solvers/static_solver.hpp"
+#include "integrators/solvers/symplectic_euler.hpp"
 
 namespace depthfem {
 namespace {

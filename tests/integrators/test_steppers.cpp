@@ -10,10 +10,10 @@
 #include <numbers>
 
 #include "core/error.hpp"
-#include "integrators/arkode_stepper.hpp"
-#include "integrators/gravity.hpp"
-#include "integrators/implicit_stepper.hpp"
-#include "integrators/symplectic_euler.hpp"
+#include "integrators/forces/gravity.hpp"
+#include "integrators/solvers/arkode_stepper.hpp"
+#include "integrators/solvers/implicit_stepper.hpp"
+#include "integrators/solvers/symplectic_euler.hpp"
 
 namespace depthfem {
 namespace {

@@ -6,9 +6,9 @@
 #include <array>
 #include <limits>
 
-#include "integrators/gravity.hpp"
-#include "integrators/nodal_spring.hpp"
-#include "integrators/system.hpp"
+#include "integrators/forces/gravity.hpp"
+#include "integrators/forces/nodal_spring.hpp"
+#include "integrators/forces/system.hpp"
 
 namespace depthfem {
 namespace {

@@ -8,10 +8,10 @@
 #include "core/mass.hpp"
 #include "core/mesh_generators.hpp"
 #include "finite_differences.hpp"
-#include "integrators/consistent_mass.hpp"
-#include "integrators/elasticity.hpp"
-#include "integrators/inversion_step.hpp"
-#include "integrators/stiffness_tether.hpp"
+#include "integrators/elements/inversion_step.hpp"
+#include "integrators/forces/consistent_mass.hpp"
+#include "integrators/forces/elasticity.hpp"
+#include "integrators/forces/stiffness_tether.hpp"
 
 namespace depthfem {
 namespace {

@@ -11,10 +11,10 @@
 #include <numeric>
 
 #include "core/mesh_generators.hpp"
-#include "integrators/constraints.hpp"
-#include "integrators/elasticity.hpp"
-#include "integrators/linear_solver.hpp"
-#include "integrators/thread_budget.hpp"
+#include "integrators/forces/constraints.hpp"
+#include "integrators/forces/elasticity.hpp"
+#include "integrators/solvers/linear_solver.hpp"
+#include "integrators/solvers/thread_budget.hpp"
 
 namespace depthfem {
 namespace {

@@ -1,0 +1,230 @@
+#include "integrators/solvers/amg_solver.hpp"
+
+#include <petscksp.h>
+
+#include <cstdlib>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+
+namespace depthfem {
+
+namespace {
+
+static_assert(std::is_same_v<PetscInt, Index>, "PETSc's index type must be depthfem's Index");
+static_assert(std::is_same_v<PetscScalar, double>, "PETSc must be built for real doubles");
+
+// Throws with PETSc's message when a call failed.
+void check(PetscErrorCode code, const char* what) {
+  if (code == 0) return;
+  const char* text = nullptr;
+  PetscErrorMessage(code, &text, nullptr);
+  throw std::runtime_error(std::string("PETSc ") + what + " failed: " + (text ? text : "?"));
+}
+
+// PETSc (and MPI, which starts helper threads) is initialised on first use only and finalised
+// at exit. Errors come back as codes (no traceback printed); PETSc installs no signal handlers.
+struct PetscSession {
+  PetscSession() {
+    // Started without mpirun, the process is an MPI singleton, and Open MPI (Debian's MPI)
+    // looks for a runtime daemon to join and probes every transport before it settles on one:
+    // 0.4 s of wall time (0.1 s of CPU) for each run. A singleton needs neither, so unless the
+    // user or mpirun chose, it runs isolated with the self transport: 0.15-0.2 s.
+    if (!std::getenv("OMPI_COMM_WORLD_SIZE")) {
+      setenv("OMPI_MCA_ess_singleton_isolated", "1", 0);
+      setenv("OMPI_MCA_pml", "ob1", 0);
+      setenv("OMPI_MCA_btl", "self", 0);
+    }
+    static char arg0[] = "depthfem", arg1[] = "-no_signal_handler";
+    static char* args[] = {arg0, arg1, nullptr};
+    int argc = 2;
+    char** argv = args;
+    check(PetscInitialize(&argc, &argv, nullptr, nullptr), "initialisation");
+    check(PetscPushErrorHandler(PetscReturnErrorHandler, nullptr), "error handler");
+    // GAMG aggregates on the squared graph of the first two levels (PETSc's default: the first
+    // only): coarser levels and cheaper Galerkin products. Setup per Newton iteration fell by
+    // a fifth on the 1.05 M-tet cantilever (5.67 against 7.00 CPU s per Newton iteration, 43
+    // against 33 CG iterations) and on the 178 k-tet sliding blocks (1.69 against 2.09); the
+    // 164 k-tet cantilever came out even. PETSc 3.18 reads it from its options database only
+    // (PCGAMGSetAggressiveLevels leaves the level count unchanged); a value in PETSC_OPTIONS wins.
+    PetscBool given = PETSC_FALSE, given_new_name = PETSC_FALSE;
+    check(PetscOptionsHasName(nullptr, nullptr, "-pc_gamg_square_graph", &given), "options");
+    check(PetscOptionsHasName(nullptr, nullptr, "-pc_gamg_aggressive_coarsening", &given_new_name),
+          "options");
+    if (!given && !given_new_name)
+      check(PetscOptionsSetValue(nullptr, "-pc_gamg_square_graph", "2"), "options");
+  }
+  ~PetscSession() { PetscFinalize(); }
+};
+
+void start_petsc() {
+  static PetscSession session;
+}
+
+}  // namespace
+
+struct AmgSolver::Impl {
+  AmgSolverOptions options;
+  std::uint64_t version = 0;   // pattern version of the PETSc matrix and hierarchy (0: none)
+  ScalarPattern pattern;       // all entries, by rows
+  std::vector<double> values;  // for MPIAIJ (a sequential A holds its values itself)
+  VectorX coordinates;         // interleaved positions for the rigid-body modes
+  Mat A = nullptr;
+  KSP ksp = nullptr;
+  Vec b = nullptr, x = nullptr, coords = nullptr;
+
+  ~Impl() { release(); }
+  void release() {
+    KSPDestroy(&ksp);
+    MatDestroy(&A);
+    VecDestroy(&b);
+    VecDestroy(&x);
+    VecDestroy(&coords);
+    version = 0;
+    lag_ok = false;
+  }
+  bool in_place = false;     // A is sequential AIJ: values are written into its array
+  bool lag_ok = false;       // the current preconditioner may serve the next matrix
+  int setup_iterations = 0;  // CG iterations of the solve that built it
+
+  void set_up(const BlockSparseMatrix& M);
+  void update_values(const BlockSparseMatrix& M);
+  AmgSolveStats run(const VectorX& rhs, VectorX& sol);
+};
+
+void AmgSolver::Impl::set_up(const BlockSparseMatrix& M) {
+  release();
+  pattern = M.scalar_pattern(Triangle::kFull);
+  values.resize(pattern.col.size());
+  M.scalar_values(pattern, values.data());
+  const PetscInt n = static_cast<PetscInt>(pattern.row_begin.size()) - 1;
+  check(MatCreate(PETSC_COMM_WORLD, &A), "MatCreate");
+  check(MatSetSizes(A, n, n, n, n), "MatSetSizes");
+  check(MatSetBlockSize(A, 3), "MatSetBlockSize");
+  // AIJ: PETSc's sequential type on one process, MPIAIJ on several (PETSC_OPTIONS' -mat_type
+  // mpiaij forces the latter on one). On one process the sequential kernels are the faster:
+  // the 1.05 M-tet cantilever's multigrid set-up took 6.9 s against 9.8 s (its sparse matrix
+  // products 5.9 against 8.4 s), the run 1.57 against 2.20 GB. Of the two preallocations only
+  // the one for A's type acts.
+  check(MatSetType(A, MATAIJ), "MatSetType");
+  check(MatSetFromOptions(A), "MatSetFromOptions");
+  const PetscInt* rows = pattern.row_begin.data();
+  check(MatSeqAIJSetPreallocationCSR(A, rows, pattern.col.data(), values.data()), "hand-over");
+  check(MatMPIAIJSetPreallocationCSR(A, rows, pattern.col.data(), values.data()), "hand-over");
+  PetscBool sequential = PETSC_FALSE;
+  check(PetscObjectTypeCompare(reinterpret_cast<PetscObject>(A), MATSEQAIJ, &sequential), "type");
+  in_place = sequential;
+  MatInfo info;
+  check(MatGetInfo(A, MAT_LOCAL, &info), "MatGetInfo");
+  if (info.nz_used != static_cast<PetscLogDouble>(pattern.col.size()))  // A's array is ours
+    throw std::logic_error("PETSc's matrix does not hold the pattern's entries");
+  if (in_place) values = {};  // later values go straight into A's own array
+  check(MatSetOption(A, MAT_SPD, PETSC_TRUE), "MatSetOption");
+  check(MatCreateVecs(A, &x, &b), "MatCreateVecs");
+  check(VecDuplicate(x, &coords), "VecDuplicate");
+
+  check(KSPCreate(PETSC_COMM_WORLD, &ksp), "KSPCreate");
+  check(KSPSetType(ksp, KSPCG), "KSPSetType");
+  check(KSPSetNormType(ksp, KSP_NORM_UNPRECONDITIONED), "KSPSetNormType");
+  check(KSPSetTolerances(ksp, options.tolerance, 0.0, PETSC_DEFAULT, options.max_iterations),
+        "KSPSetTolerances");
+  PC pc;
+  check(KSPGetPC(ksp, &pc), "KSPGetPC");
+  if (options.preconditioner == AmgPreconditioner::kGamg) {
+    check(PCSetType(pc, PCGAMG), "PCSetType");
+    check(PCGAMGSetReuseInterpolation(pc, PETSC_TRUE), "PCGAMGSetReuseInterpolation");
+    // Dropping graph edges weaker than 2 % of the diagonal from the aggregation and stopping at
+    // 1000 coarse unknowns: on the bent cantilever (95 k and 266 k unknowns) CG needs 32 and 33
+    // iterations for three Newton steps instead of 52 and 55 (PETSc's defaults 0 and 50).
+    PetscReal threshold = 0.02;
+    check(PCGAMGSetThreshold(pc, &threshold, 1), "PCGAMGSetThreshold");
+    check(PCGAMGSetCoarseEqLim(pc, 1000), "PCGAMGSetCoarseEqLim");
+  } else {
+    check(PCSetType(pc, PCHYPRE), "PCSetType");
+    check(PCHYPRESetType(pc, "boomeramg"), "PCHYPRESetType");
+  }
+  check(KSPSetFromOptions(ksp), "KSPSetFromOptions");
+  version = M.pattern_version();
+}
+
+void AmgSolver::Impl::update_values(const BlockSparseMatrix& M) {
+  if (in_place) {
+    PetscScalar* a = nullptr;
+    check(MatSeqAIJGetArrayWrite(A, &a), "MatSeqAIJGetArrayWrite");
+    M.scalar_values(pattern, a);
+    check(MatSeqAIJRestoreArrayWrite(A, &a), "MatSeqAIJRestoreArrayWrite");
+    return;
+  }
+  M.scalar_values(pattern, values.data());
+  const PetscInt n = static_cast<PetscInt>(pattern.row_begin.size()) - 1;
+  check(MatUpdateMPIAIJWithArrays(A, n, n, n, n, pattern.row_begin.data(), pattern.col.data(),
+                                  values.data()),
+        "matrix update");
+}
+
+AmgSolver::AmgSolver(AmgSolverOptions options) : impl_(std::make_unique<Impl>()) {
+  impl_->options = options;
+  start_petsc();
+}
+AmgSolver::~AmgSolver() = default;
+
+AmgSolveStats AmgSolver::solve(const BlockSparseMatrix& M, const VectorX& rhs, VectorX& sol,
+                               const Points* positions) {
+  Impl& s = *impl_;
+  if (s.version != M.pattern_version()) {
+    s.set_up(M);
+  } else {
+    s.update_values(M);
+  }
+  if (positions) {  // rigid-body modes at the current positions: 3 translations, 3 rotations
+    s.coordinates = as_dofs(*positions);
+    check(VecPlaceArray(s.coords, s.coordinates.data()), "VecPlaceArray");
+    MatNullSpace modes;
+    check(MatNullSpaceCreateRigidBody(s.coords, &modes), "MatNullSpaceCreateRigidBody");
+    check(MatSetNearNullSpace(s.A, modes), "MatSetNearNullSpace");
+    check(MatNullSpaceDestroy(&modes), "MatNullSpaceDestroy");
+    check(VecResetArray(s.coords), "VecResetArray");
+  }
+
+  // A preconditioner from an earlier matrix of this pattern serves while CG needs at most
+  // twice the iterations it needed when it was built; a failed solve with it is repeated with
+  // a fresh one.
+  AmgSolveStats stats;
+  bool reuse = s.lag_ok && s.options.lag_preconditioner;
+  for (;;) {
+    check(KSPSetReusePreconditioner(s.ksp, reuse ? PETSC_TRUE : PETSC_FALSE), "reuse");
+    check(KSPSetOperators(s.ksp, s.A, s.A), "KSPSetOperators");
+    const AmgSolveStats one = s.run(rhs, sol);
+    stats.iterations += one.iterations;
+    stats.converged = one.converged;
+    if (!reuse) {
+      s.setup_iterations = one.iterations;
+      s.lag_ok = one.converged;
+      break;
+    }
+    if (one.converged) {
+      s.lag_ok = one.iterations <= 2 * s.setup_iterations;
+      break;
+    }
+    reuse = false;
+  }
+  return stats;
+}
+
+AmgSolveStats AmgSolver::Impl::run(const VectorX& rhs, VectorX& sol) {
+  sol.setZero(rhs.size());
+  check(VecPlaceArray(b, rhs.data()), "VecPlaceArray");
+  check(VecPlaceArray(x, sol.data()), "VecPlaceArray");
+  const PetscErrorCode code = KSPSolve(ksp, b, x);
+  VecResetArray(b);
+  VecResetArray(x);
+  check(code, "KSPSolve");
+  AmgSolveStats stats;
+  KSPConvergedReason reason;
+  check(KSPGetIterationNumber(ksp, &stats.iterations), "KSPGetIterationNumber");
+  check(KSPGetConvergedReason(ksp, &reason), "KSPGetConvergedReason");
+  stats.converged = reason > 0;
+  return stats;
+}
+
+}  // namespace depthfem

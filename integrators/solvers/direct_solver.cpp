@@ -1,0 +1,327 @@
+#include "integrators/solvers/direct_solver.hpp"
+
+#include <cholmod.h>
+
+#include "integrators/solvers/thread_budget.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace depthfem {
+
+namespace {
+
+// Lowest Ritz value of 30 Lanczos steps on D^-1/2 A D^-1/2, D = diag(weight) (from a fixed
+// pseudo-random start): it converges to the lowest eigenvalue from above, fast at the ends of the
+// spectrum; 30 products cost a few per cent of a factorisation. Scaled by the diagonal, the
+// spectrum of a stiffness matrix lies in about [-1, 2] whatever the spread of its materials and
+// penalties, so that a negative eigenvalue stands clear of the others.
+double lowest_eigenvalue_estimate(const BlockSparseMatrix& A, const VectorX& weight) {
+  const Index n = 3 * A.num_nodes();
+  const VectorX inv_sqrt = weight.cwiseSqrt().cwiseInverse();
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> u(-1, 1);
+  VectorX v(n), v_prev = VectorX::Zero(n), w;
+  for (Index i = 0; i < n; ++i) v(i) = u(rng);
+  v.normalize();
+  std::vector<double> alpha, beta;
+  double b = 0;
+  for (int j = 0; j < std::min<Index>(30, n); ++j) {
+    A.multiply(inv_sqrt.cwiseProduct(v), w);
+    w = inv_sqrt.cwiseProduct(w);
+    alpha.push_back(w.dot(v));
+    w -= alpha.back() * v + b * v_prev;
+    b = w.norm();
+    if (!(b > 1e-12 * std::abs(alpha.back()))) break;  // invariant subspace: exact
+    beta.push_back(b);
+    v_prev.swap(v);
+    v = w / b;
+  }
+  const Eigen::Index m = static_cast<Eigen::Index>(alpha.size());
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> T;
+  T.computeFromTridiagonal(Eigen::Map<const VectorX>(alpha.data(), m),
+                           Eigen::Map<const VectorX>(beta.data(), m - 1), Eigen::EigenvaluesOnly);
+  return T.eigenvalues()(0);
+}
+
+// The graph of the 3x3 blocks of M as a CHOLMOD pattern matrix with its upper triangle read
+// (stype 1; the full pattern is symmetric), freed with the common it was allocated with.
+auto block_graph(const BlockSparseMatrix& M, cholmod_common& c) {
+  const auto free_sparse = [&c](cholmod_sparse* S) { cholmod_free_sparse(&S, &c); };
+  const Index nodes = M.num_nodes();
+  std::unique_ptr<cholmod_sparse, decltype(free_sparse)> G(
+      cholmod_allocate_sparse(nodes, nodes, M.num_blocks(), 1, 1, 1, CHOLMOD_PATTERN, &c),
+      free_sparse);
+  if (!G) throw std::runtime_error("CHOLMOD allocation failed");
+  for (Index i = 0; i <= nodes; ++i) static_cast<int*>(G->p)[i] = M.row_begin(i);
+  for (Index k = 0; k < M.num_blocks(); ++k) static_cast<int*>(G->i)[k] = M.block_col(k);
+  return G;
+}
+
+}  // namespace
+
+double predicted_factor_flops(const BlockSparseMatrix& A) {
+  cholmod_common c;
+  cholmod_start(&c);
+  c.print = 0;
+  c.nmethods = 1;
+  c.method[0].ordering = CHOLMOD_AMD;
+  c.supernodal = CHOLMOD_SIMPLICIAL;  // column counts only
+  double flops = -1;
+  {
+    const auto G = block_graph(A, c);
+    cholmod_factor* L = cholmod_analyze(G.get(), &c);
+    if (L) flops = 27 * c.fl;
+    cholmod_free_factor(&L, &c);
+  }
+  cholmod_finish(&c);
+  if (!(flops >= 0)) throw std::runtime_error("CHOLMOD analysis of the block graph failed");
+  return flops;
+}
+
+double lower_triangle_entries(const BlockSparseMatrix& A) {
+  return (9.0 * A.num_blocks() + 3.0 * A.num_nodes()) / 2;
+}
+
+struct DirectSolver::Impl {
+  DirectSolverOptions options;
+  cholmod_common c;
+  std::uint64_t version = 0;    // pattern version of the analysis (0: none)
+  ScalarPattern pattern;        // upper triangle by rows = lower triangle by columns
+  cholmod_sparse* A = nullptr;  // lower triangle (stype -1), values refreshed every solve
+  DirectAnalysis analysis;
+  std::vector<int> perm;           // fill-reducing dof ordering
+  std::vector<Index> diagonal;     // position of every diagonal entry in A->x
+  cholmod_factor* llt = nullptr;   // supernodal LL^T
+  cholmod_factor* ldlt = nullptr;  // simplicial LDL^T, analysed on first need
+  bool llt_valid = false;          // llt holds the factor of an earlier matrix of this pattern
+  cholmod_dense *X = nullptr, *Y = nullptr, *E = nullptr;  // solve workspace
+
+  explicit Impl(DirectSolverOptions o) : options(o) {
+    cholmod_start(&c);
+    c.print = 0;  // a failed LL^T is expected on indefinite matrices and handled
+    c.supernodal = CHOLMOD_SUPERNODAL;
+  }
+  ~Impl() {
+    release_pattern();
+    cholmod_free_dense(&X, &c);
+    cholmod_free_dense(&Y, &c);
+    cholmod_free_dense(&E, &c);
+    cholmod_finish(&c);
+  }
+  void release_pattern() {
+    cholmod_free_sparse(&A, &c);
+    cholmod_free_factor(&llt, &c);
+    cholmod_free_factor(&ldlt, &c);
+    version = 0;
+    llt_valid = false;
+  }
+  void check(const char* what) const {
+    if (c.status < CHOLMOD_OK)
+      throw std::runtime_error(std::string("CHOLMOD ") + what + " failed (status " +
+                               std::to_string(c.status) + ")");
+  }
+
+  void analyse(const BlockSparseMatrix& M);
+  std::vector<int> node_ordering(cholmod_sparse* G, DirectOrdering ordering);
+  cholmod_factor* analyse_with(int supernodal);
+  bool factorize(cholmod_factor* L, double s);
+  bool factorize_shifted(const VectorX& d, const VectorX& weight, double s);
+  void solve_with(cholmod_factor* L, const VectorX& b, VectorX& x);
+  bool reuse(const BlockSparseMatrix& M, const VectorX& b, VectorX& x, double tolerance,
+             int& iterations);
+};
+
+// Orders the graph G of the 3x3 blocks (nine times fewer edges than the scalar graph) and
+// keeps the three dofs of a node together.
+std::vector<int> DirectSolver::Impl::node_ordering(cholmod_sparse* G, DirectOrdering ordering) {
+  std::vector<int> node_perm(G->nrow);
+  const int ok = ordering == DirectOrdering::kMetis
+                     ? cholmod_metis(G, nullptr, 0, 1, node_perm.data(), &c)
+                     : cholmod_amd(G, nullptr, 0, node_perm.data(), &c);
+  if (!ok) check("ordering");
+  std::vector<int> p(3 * node_perm.size());
+  for (size_t k = 0; k < node_perm.size(); ++k)
+    for (int d = 0; d < 3; ++d) p[3 * k + d] = 3 * node_perm[k] + d;
+  return p;
+}
+
+cholmod_factor* DirectSolver::Impl::analyse_with(int supernodal) {
+  c.nmethods = 1;
+  c.method[0].ordering = CHOLMOD_GIVEN;
+  c.postorder = 1;
+  c.supernodal = supernodal;
+  cholmod_factor* L = cholmod_analyze_p(A, perm.data(), nullptr, 0, &c);
+  check("analysis");
+  return L;
+}
+
+void DirectSolver::Impl::analyse(const BlockSparseMatrix& M) {
+  release_pattern();
+  pattern = M.scalar_pattern(Triangle::kUpper);
+  const size_t n = pattern.row_begin.size() - 1, nnz = pattern.col.size();
+  A = cholmod_allocate_sparse(n, n, nnz, 1, 1, -1, CHOLMOD_REAL, &c);
+  check("allocate");
+  std::copy(pattern.row_begin.begin(), pattern.row_begin.end(), static_cast<int*>(A->p));
+  std::copy(pattern.col.begin(), pattern.col.end(), static_cast<int*>(A->i));
+  diagonal.resize(n);  // every diagonal block is in the pattern
+  for (size_t j = 0; j < n; ++j) {
+    const auto row = pattern.col.begin();
+    diagonal[j] =
+        std::find(row + pattern.row_begin[j], row + pattern.row_begin[j + 1], Index(j)) - row;
+  }
+  const auto G = block_graph(M, c);
+  const auto try_ordering = [&](DirectOrdering o) {
+    perm = node_ordering(G.get(), o);
+    llt = analyse_with(CHOLMOD_SUPERNODAL);
+    analysis = {o, c.fl, c.lnz};
+  };
+  const DirectOrdering first =
+      options.ordering == DirectOrdering::kMetis ? DirectOrdering::kMetis : DirectOrdering::kAmd;
+  try_ordering(first);
+  // CHOLMOD's own rule for trying nested dissection after AMD: large fronts (flops >= 500 per
+  // entry of L) mean large separators, where nested dissection cuts the fill.
+  if (options.ordering == DirectOrdering::kBest &&
+      analysis.flops >= 500 * analysis.factor_entries) {
+    const DirectAnalysis amd = analysis;
+    std::vector<int> amd_perm = perm;
+    cholmod_factor* amd_llt = llt;
+    try_ordering(DirectOrdering::kMetis);
+    if (analysis.flops < amd.flops) {
+      cholmod_free_factor(&amd_llt, &c);
+    } else {
+      cholmod_free_factor(&llt, &c);
+      llt = amd_llt;
+      perm = std::move(amd_perm);
+      analysis = amd;
+    }
+  }
+  version = M.pattern_version();
+}
+
+// Factors A + s I into L; false when it is not positive definite (LL^T) or has a zero pivot.
+bool DirectSolver::Impl::factorize(cholmod_factor* L, double s) {
+  double beta[2] = {s, 0};
+  const SerialBlas serial(analysis.flops < options.threaded_factor_flops);
+  cholmod_factorize_p(A, beta, nullptr, 0, L, &c);
+  check("factorization");
+  return L->minor == L->n;
+}
+
+// Factors A + s diag(weight) into llt, where d holds the diagonal of A; false as factorize.
+bool DirectSolver::Impl::factorize_shifted(const VectorX& d, const VectorX& weight, double s) {
+  double* values = static_cast<double*>(A->x);
+  for (size_t j = 0; j < diagonal.size(); ++j) values[diagonal[j]] = d(j) + s * weight(j);
+  return factorize(llt, 0);
+}
+
+void DirectSolver::Impl::solve_with(cholmod_factor* L, const VectorX& b, VectorX& x) {
+  cholmod_dense B{};
+  B.nrow = B.d = static_cast<size_t>(b.size());
+  B.ncol = 1;
+  B.nzmax = B.nrow;
+  B.x = const_cast<double*>(b.data());
+  B.xtype = CHOLMOD_REAL;
+  B.dtype = CHOLMOD_DOUBLE;
+  const SerialBlas serial;
+  cholmod_solve2(CHOLMOD_A, L, &B, nullptr, &X, nullptr, &Y, &E, &c);
+  check("solve");
+  x = Eigen::Map<const VectorX>(static_cast<const double*>(X->x), b.size());
+}
+
+DirectSolver::DirectSolver(DirectSolverOptions options) : impl_(std::make_unique<Impl>(options)) {}
+DirectSolver::~DirectSolver() = default;
+
+const DirectAnalysis& DirectSolver::analyse(const BlockSparseMatrix& M) {
+  if (impl_->version != M.pattern_version()) impl_->analyse(M);
+  return impl_->analysis;
+}
+
+// Conjugate gradients preconditioned by the kept factor; false when they fall short.
+bool DirectSolver::Impl::reuse(const BlockSparseMatrix& M, const VectorX& b, VectorX& x,
+                               double tolerance, int& iterations) {
+  const int cap =
+      static_cast<int>(std::clamp(analysis.flops / (40 * analysis.factor_entries), 2.0, 50.0));
+  x.setZero(b.size());
+  VectorX r = b, z, p, Ap;
+  solve_with(llt, r, z);
+  p = z;
+  double rz = r.dot(z);
+  for (iterations = 1; iterations <= cap; ++iterations) {
+    M.multiply(p, Ap);
+    const double pAp = p.dot(Ap);
+    if (!(pAp > 0)) return false;  // A is not positive definite
+    const double alpha = rz / pAp;
+    x += alpha * p;
+    r -= alpha * Ap;
+    const double reduction = r.norm() / b.norm();
+    if (reduction <= tolerance) return true;
+    // Give up as soon as the reduction so far, extrapolated at its mean rate, misses the cap.
+    if (iterations >= 2 && iterations * std::log(tolerance) / std::log(reduction) > cap)
+      return false;
+    solve_with(llt, r, z);
+    const double rz_next = r.dot(z);
+    p = z + (rz_next / rz) * p;
+    rz = rz_next;
+  }
+  --iterations;
+  return false;
+}
+
+DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& b, VectorX& x,
+                                     double tolerance) {
+  Impl& s = *impl_;
+  analyse(M);
+  DirectSolveStats stats;
+  if (b.squaredNorm() == 0) {
+    x.setZero(b.size());
+    stats.success = true;
+    return stats;
+  }
+  if (s.llt_valid && s.options.reuse_tolerance > 0 &&
+      s.reuse(M, b, x, tolerance > 0 ? tolerance : s.options.reuse_tolerance,
+              stats.cg_iterations)) {
+    stats.success = x.allFinite();
+    return stats;
+  }
+  M.scalar_values(s.pattern, static_cast<double*>(s.A->x));
+  stats.factored = true;
+  s.llt_valid = false;
+  if (s.factorize(s.llt, 0)) {
+    s.llt_valid = true;
+    s.solve_with(s.llt, b, x);
+  } else if (s.options.indefinite == IndefiniteFallback::kLdlt) {
+    if (!s.ldlt) s.ldlt = s.analyse_with(CHOLMOD_SIMPLICIAL);
+    if (!s.factorize(s.ldlt, 0)) return stats;
+    s.solve_with(s.ldlt, b, x);
+    stats.ldlt = true;
+  } else {
+    // A + s D, D the diagonal of |A| (floored at 1e-12 of its largest entry), with s just past
+    // the lowest eigenvalue of D^-1/2 A D^-1/2: a Lanczos estimate of it (from above, so 1.5
+    // times its size, and at least 1e-3), raised fourfold until the factorisation succeeds. Each
+    // dof is stiffened in proportion to its own stiffness: a soft tissue beside a stiff bone or a
+    // strong penalty keeps nearly its Newton step, where a shift s I large enough for the stiff
+    // dofs would freeze it. The shifted solve is invariant under a rescaling of the dofs.
+    const VectorX d = M.diagonal();
+    const VectorX weight = d.cwiseAbs().cwiseMax(1e-12 * d.cwiseAbs().maxCoeff());
+    const double lowest = lowest_eigenvalue_estimate(M, weight);
+    double shift = std::max(1e-3, -1.5 * lowest);
+    while (!s.factorize_shifted(d, weight, shift)) {
+      shift *= 4;
+      if (!(shift < 1e3)) return stats;
+    }
+    s.llt_valid = true;
+    s.solve_with(s.llt, b, x);
+    stats.shift = shift;
+  }
+  stats.success = x.allFinite();
+  return stats;
+}
+
+}  // namespace depthfem

@@ -1,0 +1,40 @@
+#include "integrators/solvers/step_lifecycle.hpp"
+
+namespace depthfem {
+
+void StepLifecycle::begin(const Points& x, double load) {
+  if (!timing_) {
+    start_ = std::chrono::steady_clock::now();
+    timing_ = true;
+  }
+  system_.begin_step(x);
+  system_.set_load(load);
+}
+
+double StepLifecycle::gradient(const Points& x, VectorX& g) {
+  system_.prepare(x);
+  return system_.gradient(x, g);
+}
+
+void StepLifecycle::complete(double load, const NewtonResult& newton, const Points& x,
+                             const Points* v, bool settling) {
+  StepRecord step;
+  step.index = completed_;
+  step.load = load;
+  step.settling = settling;
+  step.newton_iterations = newton.iterations;
+  step.linear_iterations = newton.linear_iterations;
+  step.residuals = newton.residuals;
+  last_energy_ = gradient(x, last_gradient_);
+  step.energy = last_energy_;
+  for (const Tether* tether : terms_.excluded) step.energy -= tether->evaluate(x, nullptr, nullptr);
+  if (v && terms_.mass) step.kinetic_energy = terms_.mass->quadratic_form(*v);
+  step.reactions = constraints_.reactions(last_gradient_);
+  system_.report(x, step);
+  step.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  timing_ = false;
+  ++completed_;
+  observer_(step, x, v);
+}
+
+}  // namespace depthfem
