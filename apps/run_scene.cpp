@@ -89,6 +89,27 @@ void refuse_overwriting_inputs(const std::string& out, const std::vector<std::st
 
 }  // namespace
 
+StepState restart_state(const std::string& path, Index step, const Mesh& mesh) {
+  const auto refuse = [&](const std::string& why) {
+    throw InputError(located(path, 0, "cannot restart from it: " + why));
+  };
+  const ResultsSummary previous = read_results_summary(path);
+  if (previous.num_nodes != mesh.num_nodes() || previous.num_tets != mesh.num_tets()) {
+    refuse("it has " + std::to_string(previous.num_nodes) + " nodes and " +
+           std::to_string(previous.num_tets) + " tets, the scene " +
+           std::to_string(mesh.num_nodes()) + " and " + std::to_string(mesh.num_tets()));
+  }
+  if (previous.analysis != "static") refuse("its /run attribute analysis is not static");
+  check_results_mesh(path, mesh);
+  const StepState state = read_step_state(path, step);
+  if (state.x.rows() != mesh.num_nodes() || !state.x.allFinite())
+    refuse("step " + std::to_string(state.index) + " has no finite #nodes x 3 positions");
+  if (!(state.load >= 0 && state.load <= 1))
+    refuse("step " + std::to_string(state.index) + " has load " + std::to_string(state.load) +
+           ", not a load factor in [0, 1]");
+  return state;
+}
+
 void print_timing(const PhaseTimers& timers, double total, std::ostream& out) {
   out << "timing (s, share of " << format("%.3f", total) << " s wall):\n";
   double grouped[3] = {0, 0, 0};
@@ -130,22 +151,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   result.x = mesh.X;
   double start_load = 0;
   if (!options.restart.empty()) {
-    const auto refuse = [&](const std::string& why) {
-      throw InputError(located(options.restart, 0, "cannot restart from it: " + why));
-    };
-    if (scene.analysis != Analysis::kStatic) refuse("restarts are for static analyses only");
-    const ResultsSummary previous = read_results_summary(options.restart);
-    if (previous.num_nodes != mesh.num_nodes() || previous.num_tets != mesh.num_tets()) {
-      refuse("it has " + std::to_string(previous.num_nodes) + " nodes and " +
-             std::to_string(previous.num_tets) + " tets, the scene " +
-             std::to_string(mesh.num_nodes()) + " and " + std::to_string(mesh.num_tets()));
-    }
-    const StepState state = read_step_state(options.restart, options.restart_step);
-    if (state.x.rows() != mesh.num_nodes() || !state.x.allFinite())
-      refuse("step " + std::to_string(state.index) + " has no finite #nodes x 3 positions");
-    if (!(state.load >= 0 && state.load <= 1))
-      refuse("step " + std::to_string(state.index) + " has load " + std::to_string(state.load) +
-             ", not a load factor in [0, 1]");
+    if (scene.analysis != Analysis::kStatic)
+      throw InputError(located(options.restart, 0,
+                               "cannot restart from it: restarts are for static analyses only"));
+    const StepState state = restart_state(options.restart, options.restart_step, mesh);
     result.x = state.x;
     start_load = state.load;
     log << "restart from step " << state.index << " of " << options.restart << " at load "

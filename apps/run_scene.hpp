@@ -8,6 +8,7 @@
 
 #include "apps/scene.hpp"
 #include "core/phase_timer.hpp"
+#include "core/results_file.hpp"
 #include "core/step_record.hpp"
 
 namespace depthfem {
@@ -38,6 +39,12 @@ struct RunResult {
 /// building the modules are thrown (InputError); solver failures are returned in the result
 /// (and recorded in the results file).
 RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream& log);
+
+/// The starting state of a restart (RunOptions::restart): step `step` (the last one when < 0)
+/// of the results file `path`, which a static run of a scene with `mesh` must have written (the
+/// same nodes and tets, not only as many), with finite positions and a load factor in [0, 1];
+/// throws InputError naming the file (and the dataset at fault) otherwise.
+StepState restart_state(const std::string& path, Index step, const Mesh& mesh);
 
 /// Prints the phase timing table of a run (seconds and share of the total).
 void print_timing(const PhaseTimers& timers, double total_seconds, std::ostream& out);

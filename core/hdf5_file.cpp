@@ -1,9 +1,15 @@
 #include "core/hdf5_file.hpp"
 
 #include <fcntl.h>
+#include <poll.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <csignal>
 #include <cstring>
 #include <filesystem>
 
@@ -63,9 +69,15 @@ H5File H5File::create(const std::string& path, const std::string& name) {
 
 H5File H5File::open(const std::string& path) {
   const Handle access = unlocked_access(path);
+  // A SWMR reader may catch the writer in the middle of writing an object, so HDF5 reads
+  // metadata whose checksum fails again, sleeping 1, 2, 4, ... ns between tries: n tries wait
+  // 2^n ns in all. Its default of 100 tries waits forever on a damaged file; 20 wait about 1 ms,
+  // with which every live read of apps/tools/kill_test.sh still succeeds.
+  if (H5Pset_metadata_read_attempts(access.id(), kMetadataReadAttempts) < 0)
+    throw InputError(located(path, 0, "cannot set up HDF5 file access"));
   if (!std::filesystem::exists(path)) throw InputError(located(path, 0, "no such results file"));
   return H5File(path, path, H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, access.id()),
-                "cannot be opened as an HDF5 file");
+                "cannot be opened as an HDF5 file (not one, or its superblock is damaged)");
 }
 
 void H5File::rename(const std::string& path) {
@@ -178,11 +190,13 @@ std::vector<double> H5File::read_rows(const std::string& name, hsize_t first, hs
   const std::string what = "cannot read " + name;
   const Handle set = handle(H5Dopen2(file_.id(), name.c_str(), H5P_DEFAULT), H5Dclose, what);
   const std::vector<hsize_t> dims = dataset_dims(set.id(), what);
-  if (dims.empty() || first + count > dims[0])
+  if (dims.empty() || count > dims[0] || first > dims[0] - count)
     fail(what + ": rows " + std::to_string(first) + " to " + std::to_string(first + count) +
          " asked of " + std::to_string(dims.empty() ? 0 : dims[0]));
+  const hsize_t values = fitting_values(dims, 1, count, stored_size(set.id(), what), what);
   const RowSelection rows = select_rows(set.id(), first, count, what);
-  std::vector<double> out(size_t(rows.values));
+  if (hsize_t(rows.values) != values) fail(what + ": a selection of rows that HDF5 miscounts");
+  std::vector<double> out(values);
   if (!out.empty())
     check(H5Dread(set.id(), H5T_NATIVE_DOUBLE, rows.memory.id(), rows.file.id(), H5P_DEFAULT,
                   out.data()),
@@ -237,8 +251,8 @@ std::vector<std::string> H5File::read_texts(const std::string& name) const {
   if (H5Tget_class(type.id()) != H5T_STRING || H5Tis_variable_str(type.id()) != 0)
     fail(what + ": not a dataset of fixed-length strings");
   const size_t capacity = check(H5Tget_size(type.id()), what);
-  const Handle space = handle(H5Dget_space(set.id()), H5Sclose, what);
-  const hssize_t count = check(H5Sget_simple_extent_npoints(space.id()), what);
+  const hssize_t count = hssize_t(
+      fitting_values(dataset_dims(set.id(), what), 0, 1, std::max<size_t>(capacity, 1), what));
   std::string buffer(size_t(count) * capacity, '\0');
   if (count > 0)
     check(H5Dread(set.id(), type.id(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buffer.data()), what);
@@ -310,11 +324,20 @@ std::vector<hsize_t> H5File::dims(const std::string& name) const {
   return dataset_dims(set.id(), what);
 }
 
+H5T_class_t H5File::type_class(const std::string& name) const {
+  const std::string what = "cannot read " + name;
+  const Handle set = handle(H5Dopen2(file_.id(), name.c_str(), H5P_DEFAULT), H5Dclose, what);
+  const Handle type = handle(H5Dget_type(set.id()), H5Tclose, what);
+  const H5T_class_t out = H5Tget_class(type.id());
+  if (out == H5T_NO_CLASS) fail(what);
+  return out;
+}
+
 std::vector<double> H5File::read_doubles(const std::string& name) const {
   const std::string what = "cannot read " + name;
   const Handle set = handle(H5Dopen2(file_.id(), name.c_str(), H5P_DEFAULT), H5Dclose, what);
-  const Handle space = handle(H5Dget_space(set.id()), H5Sclose, what);
-  std::vector<double> out(check(H5Sget_simple_extent_npoints(space.id()), what));
+  std::vector<double> out(
+      fitting_values(dataset_dims(set.id(), what), 0, 1, stored_size(set.id(), what), what));
   if (!out.empty())
     check(H5Dread(set.id(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()), what);
   return out;
@@ -323,8 +346,17 @@ std::vector<double> H5File::read_doubles(const std::string& name) const {
 std::vector<std::string> H5File::read_strings(const std::string& name) const {
   const std::string what = "cannot read " + name;
   const Handle set = handle(H5Dopen2(file_.id(), name.c_str(), H5P_DEFAULT), H5Dclose, what);
-  const Handle space = handle(H5Dget_space(set.id()), H5Sclose, what);
-  std::vector<char*> raw(check(H5Sget_simple_extent_npoints(space.id()), what), nullptr);
+  const std::vector<hsize_t> dims = dataset_dims(set.id(), what);
+  if (dims.size() != 1) fail(what + ": not a list of strings");
+  {
+    const Handle file_type = handle(H5Dget_type(set.id()), H5Tclose, what);
+    if (H5Tget_class(file_type.id()) != H5T_STRING || H5Tis_variable_str(file_type.id()) <= 0)
+      fail(what + ": not a dataset of variable-length strings");
+  }
+  // A variable-length string takes 16 bytes in the file (a reference into a heap).
+  const hsize_t count = fitting_values(dims, 0, 1, 16, what);
+  check_string_references(set.id(), count, what);
+  std::vector<char*> raw(count, nullptr);
   const Handle type = string_type(what);
   if (!raw.empty())
     check(H5Dread(set.id(), type.id(), H5S_ALL, H5S_ALL, H5P_DEFAULT, raw.data()), what);
@@ -334,12 +366,238 @@ std::vector<std::string> H5File::read_strings(const std::string& name) const {
 }
 
 std::string H5File::string_attribute(const std::string& object, const std::string& name) const {
-  const std::string what = "cannot read attribute " + name + " of " + object;
-  const Handle attr = open_attribute(object, name, what);
-  const Handle type = string_type(what);
-  char* value = nullptr;
-  check(H5Aread(attr.id(), type.id(), &value), what);
-  return take_string(value);
+  return string_attributes(object, {name}).at(0);
+}
+
+std::vector<std::string> H5File::string_attributes(const std::string& object,
+                                                   const std::vector<std::string>& names) const {
+  std::vector<Handle> attributes;
+  std::string what;
+  for (const std::string& name : names) {
+    what = "cannot read attribute " + name + " of " + object;
+    attributes.push_back(open_attribute(object, name, what));
+    check_one_value(attributes.back().id(), true, what);
+  }
+  // HDF5 1.10 trusts the heap collection that holds the strings (H5HG_read indexes its objects
+  // unchecked; a damaged object size makes it read or loop out of bounds), and no function of
+  // its API gives an attribute's reference into it to check first: they are decoded in a child
+  // process, where such damage ends the child, not the reader.
+  const std::string of = names.size() == 1 ? what : "cannot read the attributes of " + object;
+  return decode_strings(
+      [&] {
+        std::vector<std::string> out;
+        const Handle type = string_type(of);
+        for (const Handle& attribute : attributes) {
+          char* value = nullptr;
+          check(H5Aread(attribute.id(), type.id(), &value), of);
+          out.push_back(take_string(value));
+        }
+        return out;
+      },
+      of);
+}
+
+namespace {
+
+/// Little-endian unsigned integer of `bytes` bytes at `p`.
+std::uint64_t little_endian(const unsigned char* p, int bytes) {
+  std::uint64_t out = 0;
+  for (int k = bytes - 1; k >= 0; --k) out = out << 8 | p[k];
+  return out;
+}
+
+}  // namespace
+
+void H5File::check_string_references(hid_t set, hsize_t count, const std::string& what) const {
+  if (count == 0) return;
+  // HDF5's file format (its specification, sections III.E and IV.B) with the 8-byte addresses
+  // and lengths of depthfem's files: a string is its length (4 bytes), the address of a global
+  // heap collection (8) and the index of an object in it (4). A collection is "GCOL", version 1,
+  // 3 reserved bytes, its size (8; at least 4096), then objects: index (2), reference count (2),
+  // 4 reserved bytes, size (8), data padded to 8 bytes; the free space is object 0, its size
+  // including its 16 header bytes; less than 16 bytes at the end are free space too.
+  const haddr_t data = H5Dget_offset(set);
+  if (data == HADDR_UNDEF) fail(what + ": its strings are not stored as depthfem stores them");
+  hsize_t base = 0;  // addresses count from the end of a user block
+  {
+    const Handle properties = handle(H5Fget_create_plist(file_.id()), H5Pclose, what);
+    check(H5Pget_userblock(properties.id(), &base), what);
+  }
+  const int fd = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) fail(what + ": " + std::strerror(errno));
+  struct stat status {};
+  const std::uint64_t file_bytes = fstat(fd, &status) == 0 ? std::uint64_t(status.st_size) : 0;
+  // `bytes` bytes from `at`, or none when they do not all lie in the file.
+  const auto read_at = [&](std::uint64_t at, std::uint64_t bytes) {
+    if (at > file_bytes || bytes > file_bytes - at) return std::vector<unsigned char>();
+    std::vector<unsigned char> out(bytes);
+    size_t done = 0;
+    while (done < bytes) {
+      const ssize_t n = pread(fd, out.data() + done, bytes - done, off_t(at + done));
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) break;
+      done += size_t(n);
+    }
+    return done == bytes ? out : std::vector<unsigned char>();
+  };
+  std::string damage;
+  const std::vector<unsigned char> references = read_at(data, count * 16);
+  if (references.empty()) damage = "its strings lie beyond the end of the file";
+  for (hsize_t k = 0; damage.empty() && k < count; ++k) {
+    const unsigned char* reference = references.data() + 16 * k;
+    const std::uint64_t length = little_endian(reference, 4),
+                        collection = little_endian(reference + 4, 8),
+                        index = little_endian(reference + 12, 4);
+    if (collection == 0) continue;  // no heap object: HDF5 reads nothing
+    const std::string which = "string " + std::to_string(k) + " ";
+    const std::vector<unsigned char> header =
+        collection < file_bytes ? read_at(base + collection, 16) : std::vector<unsigned char>();
+    const std::uint64_t size = header.empty() ? 0 : little_endian(header.data() + 8, 8);
+    const std::vector<unsigned char> heap =
+        header.empty() || std::memcmp(header.data(), "GCOL\1", 5) != 0 || size < 4096
+            ? std::vector<unsigned char>()
+            : read_at(base + collection, size);
+    if (heap.empty()) {
+      damage = which + "names no heap collection in the file";
+      break;
+    }
+    // The walk of HDF5's H5HG__cache_heap_deserialize, which checks nothing itself: each object
+    // must end inside the collection (a free space of size 0 would make HDF5 loop for ever); of
+    // several objects of one index HDF5 keeps the last.
+    std::uint64_t found = ~std::uint64_t(0);
+    for (std::uint64_t at = 16; damage.empty() && at + 16 <= size;) {
+      const std::uint64_t object = little_endian(&heap[at], 2),
+                          bytes = little_endian(&heap[at + 8], 8);
+      const std::uint64_t need = bytes > size ? size + 1
+                                 : object > 0 ? 16 + (bytes + 7) / 8 * 8
+                                              : bytes;
+      if (need < 16 || need > size - at) damage = which + "names a damaged heap collection";
+      if (object == index) found = bytes;
+      at += need;
+    }
+    if (damage.empty() && (index == 0 || found == ~std::uint64_t(0)))
+      damage = which + "names no object of its heap collection";
+    else if (damage.empty() && found != length)
+      damage = which + "and its heap object differ in length";
+  }
+  ::close(fd);
+  if (!damage.empty()) fail(what + ": " + damage);
+}
+
+std::vector<std::string> H5File::decode_strings(
+    const std::function<std::vector<std::string>()>& decode, const std::string& what) const {
+  // The child sends a kind (0: strings, 1: the message of an InputError), then each string as
+  // its length (8 bytes) and bytes, and exits; the parent reads until the pipe closes.
+  int pipe_ends[2];
+  if (pipe(pipe_ends) != 0) return decode();  // no child to be had: decode here
+  const pid_t child = fork();
+  if (child < 0) {
+    close(pipe_ends[0]);
+    close(pipe_ends[1]);
+    return decode();
+  }
+  if (child == 0) {
+    close(pipe_ends[0]);
+    // A crash is the parent's one error line: no handler, and no message of the child's own
+    // (glibc's "double free", a sanitizer's report) on the reader's stderr.
+    for (const int crash : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT}) std::signal(crash, SIG_DFL);
+    const int null = ::open("/dev/null", O_WRONLY);
+    if (null >= 0) dup2(null, STDERR_FILENO);
+    std::string message(1, '\0');
+    std::vector<std::string> strings;
+    try {
+      strings = decode();
+    } catch (const InputError& e) {
+      message[0] = 1;
+      strings = {e.what()};
+    }
+    for (const std::string& text : strings) {
+      const std::uint64_t length = text.size();
+      message.append(reinterpret_cast<const char*>(&length), sizeof length).append(text);
+    }
+    for (size_t sent = 0; sent < message.size();) {
+      const ssize_t n = write(pipe_ends[1], message.data() + sent, message.size() - sent);
+      if (n < 0 && errno != EINTR) _exit(2);
+      if (n > 0) sent += size_t(n);
+    }
+    _exit(0);  // no exit handlers: the parent's HDF5 files and buffers stay as they are
+  }
+  close(pipe_ends[1]);
+  std::string received;
+  char buffer[4096];
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  bool timed_out = false;
+  for (;;) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
+    pollfd ready{pipe_ends[0], POLLIN, 0};
+    const int polled = left.count() > 0 ? poll(&ready, 1, int(left.count())) : 0;
+    if (polled < 0 && errno == EINTR) continue;
+    if (polled <= 0) {
+      timed_out = true;
+      kill(child, SIGKILL);
+      break;
+    }
+    const ssize_t n = read(pipe_ends[0], buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    received.append(buffer, size_t(n));
+  }
+  close(pipe_ends[0]);
+  int status = 0;
+  while (waitpid(child, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (timed_out) fail(what + ": decoding its strings took longer than 5 s");
+  if (WIFSIGNALED(status))
+    fail(what + ": HDF5 crashed (signal " + std::to_string(WTERMSIG(status)) +
+         ") on its damaged strings");
+  std::vector<std::string> out;
+  size_t at = 1;
+  while (at + sizeof(std::uint64_t) <= received.size()) {
+    std::uint64_t length = 0;
+    std::memcpy(&length, received.data() + at, sizeof length);
+    at += sizeof length;
+    if (length > received.size() - at) break;
+    out.push_back(received.substr(at, length));
+    at += length;
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || received.empty() || at != received.size())
+    fail(what + ": its strings could not be decoded");
+  if (received[0] == 1) throw InputError(out.at(0));
+  return out;
+}
+
+void H5File::check_one_value(hid_t attr, bool text, const std::string& what) const {
+  const Handle space = handle(H5Aget_space(attr), H5Sclose, what);
+  if (check(H5Sget_simple_extent_npoints(space.id()), what) != 1)
+    fail(what + ": it holds more or less than one value");
+  const Handle type = handle(H5Aget_type(attr), H5Tclose, what);
+  const H5T_class_t type_class = H5Tget_class(type.id());
+  if (text ? type_class != H5T_STRING || H5Tis_variable_str(type.id()) <= 0
+           : type_class != H5T_INTEGER && type_class != H5T_FLOAT)
+    fail(what + (text ? ": not a variable-length string" : ": not a number"));
+}
+
+size_t H5File::stored_size(hid_t set, const std::string& what) const {
+  const Handle type = handle(H5Dget_type(set), H5Tclose, what);
+  return std::max<size_t>(check(H5Tget_size(type.id()), what), 1);
+}
+
+hsize_t H5File::fitting_values(const std::vector<hsize_t>& dims, size_t from, hsize_t rows,
+                               size_t bytes, const std::string& what) const {
+  hsize_t file_bytes = 0;
+  if (H5Fget_filesize(file_.id(), &file_bytes) < 0) file_bytes = 0;
+  std::error_code error;
+  const std::uintmax_t on_disk = std::filesystem::file_size(path_, error);
+  if (!error) file_bytes = std::max<hsize_t>(file_bytes, on_disk);
+  // The product saturates at most + 1, so that it cannot overflow (a zero factor still makes 0).
+  const hsize_t most = file_bytes / std::max<size_t>(bytes, 1);
+  hsize_t values = rows;
+  for (size_t k = from; k < dims.size(); ++k)
+    values = dims[k] != 0 && values > most / dims[k] ? most + 1 : values * dims[k];
+  if (values > most)
+    fail(what + ": more values than a file of " + std::to_string(file_bytes) + " bytes holds");
+  return values;
 }
 
 Handle H5File::handle(hid_t id, herr_t (*close)(hid_t), const std::string& what) const {

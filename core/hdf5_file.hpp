@@ -6,6 +6,7 @@
 #include <hdf5.h>
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -57,8 +58,12 @@ class H5File {
   /// Messages name it `name` (the results file a staging file becomes) until it is renamed.
   static H5File create(const std::string& path, const std::string& name);
   /// Opens `path` read-only as a SWMR reader: the file may be one that a writer is still
-  /// writing, one whose writer was killed, or a closed one.
+  /// writing, one whose writer was killed, or a closed one. A metadata read whose checksum fails
+  /// is tried kMetadataReadAttempts times in all, so that a damaged file fails within about a
+  /// millisecond per damaged object.
   static H5File open(const std::string& path);
+  /// Tries of a SWMR reader's metadata read before it fails (see open).
+  static constexpr unsigned kMetadataReadAttempts = 20;
 
   /// Renames the open file to `path` (same file system), which messages then name.
   void rename(const std::string& path);
@@ -129,7 +134,9 @@ class H5File {
   }
   /// Sets the number of rows of a dataset made by create_rows.
   void set_rows(const std::string& name, hsize_t rows) const;
-  /// Values of rows [first, first + count) of dataset `name` as doubles, row-major.
+  /// Values of rows [first, first + count) of dataset `name` as doubles, row-major; throws
+  /// when the dataset has fewer rows, or when they would take more bytes than the file has (so
+  /// that a damaged size cannot make a reader allocate more than 8 times the file).
   std::vector<double> read_rows(const std::string& name, hsize_t first, hsize_t count) const;
 
   /// Creates a scalar dataset holding a string of at most `capacity` bytes, written in place by
@@ -141,7 +148,8 @@ class H5File {
   void create_text_rows(const std::string& name, size_t capacity) const;
   /// Replaces the rows of a dataset made by create_text_rows by `values`, each cut to its capacity.
   void write_text_rows(const std::string& name, const std::vector<std::string>& values) const;
-  /// The strings of a dataset made by create_text (one) or create_text_rows.
+  /// The strings of a dataset made by create_text (one) or create_text_rows; throws when they
+  /// would take more bytes than the file has.
   std::vector<std::string> read_texts(const std::string& name) const;
 
   /// Creates a dataset of `dims` doubles that reads as zeros and takes no space in the file: it
@@ -167,22 +175,28 @@ class H5File {
   bool exists(const std::string& name) const;
   /// Dimensions of dataset `name`.
   std::vector<hsize_t> dims(const std::string& name) const;
-  /// All values of dataset `name` as doubles, row-major.
+  /// The class of the values of dataset `name`: H5T_INTEGER, H5T_FLOAT, H5T_STRING, ...
+  H5T_class_t type_class(const std::string& name) const;
+  /// All values of dataset `name` as doubles, row-major (at most what the file can hold).
   std::vector<double> read_doubles(const std::string& name) const;
-  /// All values of a 1D dataset of variable-length strings.
+  /// All values of a 1D dataset of variable-length strings (at most what the file can hold).
   std::vector<std::string> read_strings(const std::string& name) const;
 
-  /// Scalar numeric attribute of `object`.
+  /// Scalar numeric attribute of `object`; throws unless it holds one number.
   template <class T>
   T attribute(const std::string& object, const std::string& name) const {
     const std::string what = "cannot read attribute " + name + " of " + object;
     const Handle attr = open_attribute(object, name, what);
+    check_one_value(attr.id(), false, what);
     T value{};
     check(H5Aread(attr.id(), H5Type<T>::memory(), &value), what);
     return value;
   }
-  /// Scalar string attribute of `object`.
+  /// Scalar string attribute of `object`; throws unless it holds one variable-length string.
   std::string string_attribute(const std::string& object, const std::string& name) const;
+  /// Scalar string attributes `names` of `object`, read together (see decode_strings).
+  std::vector<std::string> string_attributes(const std::string& object,
+                                             const std::vector<std::string>& names) const;
 
  private:
   H5File(std::string path, std::string name, hid_t id, const char* failure);
@@ -218,6 +232,28 @@ class H5File {
                        hid_t memory_type, const void* value) const;
   Handle open_attribute(const std::string& object, const std::string& name,
                         const std::string& what) const;
+  /// Throws "FILE: WHAT: ..." unless attribute `attr` holds one value: a number, or with `text`
+  /// a variable-length string (H5Aread writes every value it holds into one value's memory).
+  void check_one_value(hid_t attr, bool text, const std::string& what) const;
+  /// Throws "FILE: WHAT: ..." unless the values of `rows` rows of `dims` (the product of `dims`
+  /// from dimension `from` on, times `rows`), of `bytes` bytes each in the file, fit into the
+  /// file's size: a reader allocates no more than the file could hold. Returns their number.
+  hsize_t fitting_values(const std::vector<hsize_t>& dims, size_t from, hsize_t rows, size_t bytes,
+                         const std::string& what) const;
+  /// Bytes of one value of the open dataset `set` in the file (at least 1).
+  size_t stored_size(hid_t set, const std::string& what) const;
+  /// Throws "FILE: WHAT: ..." unless each of the `count` variable-length strings of the open
+  /// dataset `set` (stored contiguously, as depthfem stores them) names an object of an intact
+  /// global heap collection of the file, as long as the string: HDF5 1.10 checks neither before
+  /// it copies the object (H5HG_read), and a damaged reference or collection made it read and
+  /// write out of bounds or loop for ever.
+  void check_string_references(hid_t set, hsize_t count, const std::string& what) const;
+  /// Runs `decode` in a child process (within 5 s) and returns the strings it returns, or
+  /// rethrows its InputError: for the strings of attributes, whose heap references HDF5's API
+  /// does not show (check_string_references), so that a damaged heap that crashes HDF5 ends in
+  /// "FILE: WHAT: HDF5 crashed ..." (or hangs it, in "... took longer than 5 s").
+  std::vector<std::string> decode_strings(const std::function<std::vector<std::string>()>& decode,
+                                          const std::string& what) const;
 
   std::string path_;
   std::string name_;  ///< the file as messages name it

@@ -7,8 +7,11 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <optional>
 #include <utility>
@@ -35,10 +38,103 @@ H5File open_results(const std::string& path) {
   return file;
 }
 
-/// The step indices of the completed steps of a results file, in row order.
+/// In a shape a reader expects: any number of rows (or values) in this dimension.
+constexpr hsize_t kAny = ~hsize_t(0);
+
+/// "12 x 3", "scalar".
+std::string shape_text(const std::vector<hsize_t>& dims) {
+  std::string out = dims.empty() ? "scalar" : "";
+  for (size_t k = 0; k < dims.size(); ++k) out += (k ? " x " : "") + std::to_string(dims[k]);
+  return out;
+}
+
+/// What a dataset of values of class `type` holds, for messages.
+std::string class_text(H5T_class_t type) {
+  switch (type) {
+    case H5T_INTEGER:
+      return "integers";
+    case H5T_FLOAT:
+      return "floating-point numbers";
+    case H5T_STRING:
+      return "strings";
+    default:
+      return "values of neither a number nor a string type";
+  }
+}
+
+/// The dimensions of dataset `name`, which must hold values of class `type` (H5T_INTEGER,
+/// H5T_FLOAT or H5T_STRING) in as many dimensions as `shape` has, equal to those of `shape` that
+/// are not kAny; throws naming the file and the dataset, with `expected` (the shape in words:
+/// "#nodes x 3"), when it does not.
+std::vector<hsize_t> checked_dims(const H5File& file, const std::string& name, H5T_class_t type,
+                                  const std::vector<hsize_t>& shape, const std::string& expected) {
+  if (!file.exists(name)) file.fail("has no dataset " + name);
+  const H5T_class_t actual = file.type_class(name);
+  if (actual != type)
+    file.fail(name + " holds " + class_text(actual) + ", not " + class_text(type));
+  const std::vector<hsize_t> dims = file.dims(name);
+  bool fits = dims.size() == shape.size();
+  for (size_t k = 0; fits && k < dims.size(); ++k) fits = shape[k] == kAny || shape[k] == dims[k];
+  if (!fits) file.fail(name + " has shape " + shape_text(dims) + ", not " + expected);
+  return dims;
+}
+
+/// The number of rows of a dataset of `columns` values of class `type` per row, which must be at
+/// most the largest Index; throws naming the file and the dataset otherwise.
+Index checked_rows(const H5File& file, const std::string& name, H5T_class_t type, hsize_t columns,
+                   const std::string& expected) {
+  const hsize_t rows = checked_dims(file, name, type, {kAny, columns}, expected)[0];
+  if (rows > hsize_t(std::numeric_limits<Index>::max()))
+    file.fail(name + " has " + std::to_string(rows) + " rows, more than depthfem can index");
+  return static_cast<Index>(rows);
+}
+
+/// `value`, read from dataset `name`, as a whole number in [least, most]; throws naming the file
+/// and the dataset when it is not one (NaN, 1e300, 2.5).
+long long whole_number(const H5File& file, const std::string& name, double value, long long least,
+                       long long most) {
+  if (!(value >= double(least) && value <= double(most) && value == std::floor(value))) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.17g", value);
+    file.fail(name + " holds " + text + ", not a whole number from " + std::to_string(least) +
+              " to " + std::to_string(most));
+  }
+  return static_cast<long long>(value);
+}
+
+/// `value`, read from dataset `name` (`what`: which value), checked finite; throws naming the file
+/// and the dataset otherwise.
+double finite_number(const H5File& file, const std::string& name, double value,
+                     const std::string& what) {
+  if (!std::isfinite(value)) file.fail(name + " holds a value that is not finite (" + what + ")");
+  return value;
+}
+
+/// The number of completed steps: the rows of /steps/index (a list of integers, at most
+/// kMaxSteps of them).
+hsize_t num_steps(const H5File& file) {
+  const hsize_t n =
+      checked_dims(file, "/steps/index", H5T_INTEGER, {kAny}, "one value per step")[0];
+  if (n > hsize_t(kMaxSteps))
+    file.fail("/steps/index has " + std::to_string(n) + " rows, more than the " +
+              std::to_string(kMaxSteps) + " steps a results file holds");
+  return n;
+}
+
+/// The step indices of the completed steps of a results file, in row order: whole numbers from 0,
+/// each above the one before.
 std::vector<Index> step_indices(const H5File& file) {
-  const std::vector<double> index = file.read_rows("/steps/index", 0, file.dims("/steps/index")[0]);
-  return {index.begin(), index.end()};
+  const std::vector<double> values = file.read_rows("/steps/index", 0, num_steps(file));
+  std::vector<Index> out;
+  for (const double value : values) {
+    const Index index = static_cast<Index>(
+        whole_number(file, "/steps/index", value, 0, std::numeric_limits<Index>::max()));
+    if (!out.empty() && index <= out.back())
+      file.fail("/steps/index holds step " + std::to_string(index) + " after step " +
+                std::to_string(out.back()) + ", not in increasing order");
+    out.push_back(index);
+  }
+  return out;
 }
 
 /// The row of step `step` in the /steps datasets; throws naming the file when it has no such step.
@@ -50,6 +146,14 @@ hsize_t step_row(const H5File& file, const std::vector<Index>& indices, Index st
                                : " (steps " + std::to_string(indices.front()) + " to " +
                                      std::to_string(indices.back()) + ")"));
   return hsize_t(at - indices.begin());
+}
+
+/// The one string of a scalar dataset of a fixed-length string (/run/status, /run/message).
+std::string one_text(const H5File& file, const std::string& name) {
+  checked_dims(file, name, H5T_STRING, {}, "one string (scalar)");
+  const std::vector<std::string> texts = file.read_texts(name);
+  if (texts.size() != 1) file.fail(name + " holds " + std::to_string(texts.size()) + " strings");
+  return texts[0];
 }
 
 /// The sidecar's blocks: one per body, named after it and its materials, except that a body with
@@ -584,27 +688,44 @@ void ResultsFile::finish(bool success, const std::string& message) {
 ResultsSummary read_results_summary(const std::string& path) {
   const H5File file = open_results(path);
   ResultsSummary out;
-  out.num_nodes = static_cast<Index>(file.dims("/mesh/X").at(0));
-  out.num_tets = static_cast<Index>(file.dims("/mesh/tets").at(0));
-  out.num_tris = static_cast<Index>(file.dims("/mesh/tris").at(0));
+  out.num_nodes = checked_rows(file, "/mesh/X", H5T_FLOAT, 3, "#nodes x 3");
+  out.num_tets = checked_rows(file, "/mesh/tets", H5T_INTEGER, 4, "#tets x 4");
+  out.num_tris = checked_rows(file, "/mesh/tris", H5T_INTEGER, 3, "#triangles x 3");
+  checked_dims(file, "/mesh/body_names", H5T_STRING, {kAny}, "one name per body");
   out.body_names = file.read_strings("/mesh/body_names");
-  out.analysis = file.string_attribute("/run", "analysis");
-  out.status = file.read_texts("/run/status").at(0);
-  out.message = file.read_texts("/run/message").at(0);
-  out.version = file.string_attribute("/run", "version");
+  std::vector<std::string> run = file.string_attributes("/run", {"analysis", "version"});
+  out.analysis = std::move(run[0]);
+  out.version = std::move(run[1]);
+  out.status = one_text(file, "/run/status");
+  if (out.status != "running" && out.status != "completed" && out.status != "failed")
+    file.fail("/run/status is neither running, completed nor failed");
+  out.message = one_text(file, "/run/message");
   out.threads = file.attribute<int>("/run", "threads");
-  const hsize_t n = file.dims("/steps/index")[0];
+  if (out.threads < 1) file.fail("/run attribute threads is " + std::to_string(out.threads));
+  const hsize_t n = num_steps(file);
   out.num_steps = static_cast<Index>(n);
-  for (const double k : file.read_rows("/steps/newton_iterations", 0, n))
-    out.total_newton_iterations += long(k);
-  for (const double k : file.read_rows("/steps/linear_iterations", 0, n))
-    out.total_linear_iterations += long(k);
-  if (n > 0) out.last_load = file.read_rows("/steps/load", n - 1, 1)[0];
+  for (const auto& [name, total] :
+       {std::pair<const char*, long*>{"/steps/newton_iterations", &out.total_newton_iterations},
+        std::pair<const char*, long*>{"/steps/linear_iterations", &out.total_linear_iterations}}) {
+    checked_dims(file, name, H5T_INTEGER, {kAny}, "one value per step");
+    for (const double k : file.read_rows(name, 0, n))
+      *total += whole_number(file, name, k, 0, std::numeric_limits<std::int32_t>::max());
+  }
+  if (n > 0) {
+    checked_dims(file, "/steps/load", H5T_FLOAT, {kAny}, "one value per step");
+    out.last_load = finite_number(file, "/steps/load", file.read_rows("/steps/load", n - 1, 1)[0],
+                                  "the last step's");
+  }
+  checked_dims(file, "/timing/phases", H5T_STRING, {kAny}, "one name per phase");
   const std::vector<std::string> phases = file.read_texts("/timing/phases");
-  const std::vector<double> seconds =
-      file.read_rows("/timing/seconds", 0, file.dims("/timing/seconds")[0]);
-  for (size_t k = 0; k < std::min(phases.size(), seconds.size()); ++k)
+  const hsize_t rows =
+      checked_dims(file, "/timing/seconds", H5T_FLOAT, {kAny}, "one value per phase")[0];
+  const std::vector<double> seconds = file.read_rows("/timing/seconds", 0, rows);
+  for (size_t k = 0; k < std::min(phases.size(), seconds.size()); ++k) {
+    if (!(finite_number(file, "/timing/seconds", seconds[k], "phase " + std::to_string(k)) >= 0))
+      file.fail("/timing/seconds holds a negative time (phase " + std::to_string(k) + ")");
     out.timing.emplace_back(phases[k], seconds[k]);
+  }
   return out;
 }
 
@@ -615,15 +736,30 @@ Eigen::MatrixXd read_step_dataset(const std::string& path, Index step, const std
   const std::string dataset = "/steps/" + name;
   if (name == "index" || !file.exists(dataset)) file.fail("has no dataset " + dataset);
   if (name == "residuals") {
-    const std::vector<double> counts = file.read_rows("/steps/residual_count", 0, row + 1);
-    hsize_t first = 0;
-    for (hsize_t k = 0; k < row; ++k) first += hsize_t(counts[k]);
-    const std::vector<double> values = file.read_rows(dataset, first, hsize_t(counts[row]));
+    // Step k's residuals follow those of the steps before, residual_count[k] of them.
+    const char* counts_name = "/steps/residual_count";
+    checked_dims(file, counts_name, H5T_INTEGER, {kAny}, "one value per step");
+    checked_dims(file, dataset, H5T_FLOAT, {kAny}, "one list of all residuals");
+    const std::vector<double> counts = file.read_rows(counts_name, 0, row + 1);
+    hsize_t first = 0, count = 0;
+    for (hsize_t k = 0; k <= row; ++k) {
+      first += count;
+      count = hsize_t(
+          whole_number(file, counts_name, counts[k], 0, std::numeric_limits<std::int32_t>::max()));
+    }
+    const std::vector<double> values = file.read_rows(dataset, first, count);
     return Eigen::Map<const VectorX>(values.data(), Eigen::Index(values.size()));
   }
+  const H5T_class_t type = file.type_class(dataset);
+  if (type != H5T_INTEGER && type != H5T_FLOAT)
+    file.fail(dataset + " holds " + class_text(type) + ", not numbers");
   const std::vector<hsize_t> dims = file.dims(dataset);
-  if (dims.size() > 3) file.fail(dataset + " is not a series of scalars, vectors or matrices");
+  const auto too_large = [](hsize_t n) { return n > hsize_t(std::numeric_limits<Index>::max()); };
+  if (dims.empty() || dims.size() > 3 || std::any_of(dims.begin() + 1, dims.end(), too_large))
+    file.fail(dataset + " has shape " + shape_text(dims) +
+              ", not #steps (x rows (x columns)): a series of scalars, vectors or matrices");
   const std::vector<double> values = file.read_rows(dataset, row, 1);
+  // read_rows read as many values as the rows and columns hold (it checked their product).
   return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
       values.data(), dims.size() > 1 ? Eigen::Index(dims[1]) : 1,
       dims.size() > 2 ? Eigen::Index(dims[2]) : 1);
@@ -640,11 +776,46 @@ StepState read_step_state(const std::string& path, Index step) {
   StepState out;
   out.index = step < 0 ? indices.back() : step;
   const hsize_t row = step_row(file, indices, out.index);
-  out.load = file.read_rows("/steps/load", row, 1)[0];
+  const std::string of_step = "step " + std::to_string(out.index);
+  checked_dims(file, "/steps/load", H5T_FLOAT, {kAny}, "one value per step");
+  out.load = finite_number(file, "/steps/load", file.read_rows("/steps/load", row, 1)[0], of_step);
+  const Index nodes = checked_rows(file, "/mesh/X", H5T_FLOAT, 3, "#nodes x 3");
+  checked_dims(file, "/steps/x", H5T_FLOAT, {kAny, hsize_t(nodes), 3},
+               "#steps x " + std::to_string(nodes) + " x 3 (the nodes of /mesh/X)");
   const std::vector<double> x = file.read_rows("/steps/x", row, 1);
-  out.x = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
-      x.data(), Eigen::Index(x.size() / 3), 3);
+  for (size_t k = 0; k < x.size(); ++k)
+    finite_number(file, "/steps/x", x[k], of_step + ", node " + std::to_string(k / 3));
+  out.x = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(x.data(),
+                                                                                      nodes, 3);
   return out;
+}
+
+void check_results_mesh(const std::string& path, const Mesh& mesh) {
+  const H5File file = open_results(path);
+  const Index nodes = checked_rows(file, "/mesh/X", H5T_FLOAT, 3, "#nodes x 3");
+  const Index tets = checked_rows(file, "/mesh/tets", H5T_INTEGER, 4, "#tets x 4");
+  if (nodes != mesh.num_nodes() || tets != mesh.num_tets())
+    file.fail("was written for another mesh: /mesh/X and /mesh/tets hold " + std::to_string(nodes) +
+              " nodes and " + std::to_string(tets) + " tets, the mesh " +
+              std::to_string(mesh.num_nodes()) + " and " + std::to_string(mesh.num_tets()));
+  const std::vector<double> tet_nodes = file.read_rows("/mesh/tets", 0, hsize_t(tets));
+  for (Index t = 0; t < tets; ++t)
+    for (int c = 0; c < 4; ++c)
+      if (tet_nodes[size_t(4 * t + c)] != double(mesh.tets(t, c)))
+        file.fail("was written for another mesh: /mesh/tets row " + std::to_string(t) +
+                  " is not the mesh's tet " + std::to_string(t));
+  // The same scene read or generated by another build (with or without fused multiply-adds) may
+  // place a node a few units in the last place apart; 1e-9 of the mesh's size is far above that
+  // and far below any difference between two meshes that a scene means.
+  const std::vector<double> X = file.read_rows("/mesh/X", 0, hsize_t(nodes));
+  const double size =
+      nodes > 0 ? (mesh.X.colwise().maxCoeff() - mesh.X.colwise().minCoeff()).norm() : 0.0;
+  for (Index i = 0; i < nodes; ++i) {
+    const Vec3 in_file(X[size_t(3 * i)], X[size_t(3 * i + 1)], X[size_t(3 * i + 2)]);
+    if (!((in_file - mesh.X.row(i).transpose()).norm() <= 1e-9 * size))
+      file.fail("was written for another mesh: /mesh/X row " + std::to_string(i) +
+                " is not the position of the mesh's node " + std::to_string(i));
+  }
 }
 
 }  // namespace depthfem

@@ -121,8 +121,11 @@ struct ResultsSummary {
   std::vector<std::pair<std::string, double>> timing;  ///< (phase, seconds) in written order
 };
 
-/// Reads the summary of a results file; throws InputError naming the file when it is missing, not
-/// HDF5, or not a depthfem results file.
+/// Reads the summary of a results file; throws InputError naming the file (and the dataset at
+/// fault) when it is missing, not HDF5, not a depthfem results file, or holds what a writer could
+/// not have written: a dataset of another shape or type, a count that is not a whole number in
+/// range, a load or time that is not finite. Every reader below checks what it reads the same way,
+/// and none waits long on a damaged file (H5File::open).
 ResultsSummary read_results_summary(const std::string& path);
 
 /// The sidecars of results file `path`, the paths the writer writes beside it.
@@ -132,8 +135,8 @@ std::vector<std::string> results_sidecars(const std::string& path);
 std::string results_lock_path(const std::string& path);
 
 /// Row of step `step` (its index) of dataset /steps/NAME ("x", "stress", "load", "residuals",
-/// ...) as #rows x #columns (one column for a series of vectors, 1 x 1 for scalars); throws
-/// InputError naming file, step and dataset if absent.
+/// ...) as #rows x #columns (one column for a series of vectors, 1 x 1 for scalars), its values
+/// as written (NaN included); throws InputError naming file, step and dataset if absent.
 Eigen::MatrixXd read_step_dataset(const std::string& path, Index step, const std::string& name);
 
 /// Positions x of step `step` (#nodes x 3 [m]); throws InputError naming file and step if absent.
@@ -146,8 +149,14 @@ struct StepState {
   Points x;         ///< #nodes x 3 [m]
 };
 
-/// Step `step` of a results file, the last one when `step` < 0; throws InputError naming the
-/// file when it has no such step (or no steps at all).
+/// Step `step` of a results file, the last one when `step` < 0, with a finite load and finite
+/// positions of the nodes of /mesh/X; throws InputError naming the file (and the dataset at
+/// fault) when it has no such step (or no steps at all) or they are not.
 StepState read_step_state(const std::string& path, Index step = -1);
+
+/// Throws InputError naming the file and the dataset unless the results file at `path` was
+/// written for `mesh`: /mesh/tets equal to its tets, /mesh/X its node positions (to 1e-9 of the
+/// mesh's size). Counts alone do not tell two meshes apart.
+void check_results_mesh(const std::string& path, const Mesh& mesh);
 
 }  // namespace depthfem

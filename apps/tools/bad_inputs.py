@@ -3,17 +3,19 @@
 
     /usr/bin/python3 apps/tools/bad_inputs.py DEPTHFEM [--csv OUT.csv]
 
-Every case is one `depthfem` command on a scene, a mesh file or a command line that is wrong in
-one way (the classes of bench/results/reliability.md). Outcomes:
+Every case is one `depthfem` command on a scene, a mesh file, a results file (`info`, `run
+--restart`) or a command line that is wrong in one way (the classes of
+bench/results/reliability.md). Outcomes:
   clean      exit 1 (2 for command-line usage), the first line of stderr is
-             "depthfem: error: ..." and names where: the scene file, the mesh file and line, or
-             the option; with exit 1 that is the only line
+             "depthfem: error: ..." and names where: the scene file, the mesh file and line, the
+             results file and dataset, or the option; with exit 1 that is the only line
   unlocated  an error, but the line names neither the file nor the option
   accepted   exit 0: a bad input run as if it were good (a silent wrong result)
   crash      killed by a signal or another exit status
   hang       still running after 30 s
 Control cases (the base scene with a generated mesh, Gmsh and TetGen files, a tet given in the
-other orientation, which the readers turn, physical groups) must run and exit 0, so the harness cannot call
+other orientation, which the readers turn, physical groups; `info` on a valid results file and a
+restart from it) must run and exit 0, so the harness cannot call
 everything clean by rejecting everything. Prints a table per class;
 exits 1 if any bad case is not clean or a control fails.
 """
@@ -126,8 +128,59 @@ def removal(path):
     return edit
 
 
-def cases():
-    """(class, name, files {name: text}, arguments after 'depthfem', where-tokens, control)."""
+def results_files(exe):
+    """Valid results files (bytes) of runs of the base scene and of a scene with as many nodes and
+    tets but another mesh (a box twice as high)."""
+    out = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, text in [("base", scene()),
+                           ("other", scene(setter(["bodies", 0, "mesh", "hi"], [1, 1, 2])))]:
+            pathlib.Path(tmp, name + ".json").write_text(text)
+            subprocess.run([exe, "run", name + ".json", "--out", name + ".h5"], cwd=tmp,
+                           check=True, capture_output=True, timeout=60)
+            out[name] = pathlib.Path(tmp, name + ".h5").read_bytes()
+    return out
+
+
+def altered(results, edit):
+    """The bytes of a results file after edit(h5py.File) has changed it."""
+    import h5py
+    with tempfile.TemporaryDirectory() as tmp:
+        path = pathlib.Path(tmp, "r.h5")
+        path.write_bytes(results)
+        with h5py.File(path, "r+") as f:
+            edit(f)
+        return path.read_bytes()
+
+
+def replaced(name, **dataset):
+    """An edit that replaces dataset `name` by h5py's create_dataset(name, **dataset)."""
+    def edit(f):
+        del f[name]
+        f.create_dataset(name, **dataset)
+    return edit
+
+
+def flipped(results, offset):
+    """The bytes of a results file with every bit of byte `offset` flipped."""
+    b = bytearray(results)
+    b[offset] ^= 0xff
+    return bytes(b)
+
+
+def data_offset(results, dataset):
+    """Where the data of a contiguous dataset of a results file begin."""
+    import h5py
+    with tempfile.TemporaryDirectory() as tmp:
+        path = pathlib.Path(tmp, "r.h5")
+        path.write_bytes(results)
+        with h5py.File(path, "r") as f:
+            return f[dataset].id.get_offset()
+
+
+def cases(exe):
+    """(class, name, files {name: text or bytes}, arguments after 'depthfem', where-tokens (a
+    tuple: all of its tokens), control)."""
     run = ["run", "scene.json", "--out", "out.h5"]
     where = ["scene.json"]
     out = []
@@ -343,6 +396,49 @@ def cases():
         if "scene_file.json" in args:
             files["scene_file.json"] = scene(mesh_file="m.msh")
         add("command line", name, files, args=args, names=names)
+
+    # Results files read by `info` and `run --restart`: the error names the file and the dataset.
+    h5 = results_files(exe)
+    restart = run + ["--restart", "r.h5", "--step", "1"]
+    add("control", "info on a valid results file", {"r.h5": h5["base"]}, args=["info", "r.h5"],
+        control=True)
+    add("control", "restart from a valid results file", {"scene.json": scene(), "r.h5": h5["base"]},
+        args=restart, control=True)
+    nan = float("nan")
+    both, restart_only = ("info", "run --restart"), ("run --restart",)  # info reads no index or x
+    for name, results, dataset, commands in [
+            ("flipped superblock byte", flipped(h5["base"], 40), "HDF5", both),
+            # A string: length (4 bytes), heap collection address (8), object index (4).
+            ("damaged heap index of a string of /mesh/body_names",
+             flipped(h5["base"], data_offset(h5["base"], "/mesh/body_names") + 13),
+             "/mesh/body_names", both),
+            ("/steps/load of shape (N, 0)",
+             altered(h5["base"], replaced("/steps/load", shape=(2, 0), dtype="f8")), "/steps/load",
+             both),
+            ("NaN in /steps/index",
+             altered(h5["base"], replaced("/steps/index", data=[0.0, nan])), "/steps/index", both),
+            ("1e300 in /steps/index",
+             altered(h5["base"], replaced("/steps/index", data=[0.0, 1e300])), "/steps/index",
+             both),
+            ("2^40 in /steps/index (int64)",
+             altered(h5["base"], replaced("/steps/index", data=[0, 2**40], dtype="i8")),
+             "/steps/index", restart_only),
+            ("scalar /mesh/X", altered(h5["base"], replaced("/mesh/X", data=1.0)), "/mesh/X", both),
+            ("empty /run/status",
+             altered(h5["base"], replaced("/run/status", shape=(0,), dtype="S16")), "/run/status",
+             both),
+            ("NaN position in /steps/x", altered(h5["base"], lambda f: f["/steps/x"].__setitem__(
+                (1, 3, 1), nan)), "/steps/x", restart_only),
+            ("/run attribute threads an array",
+             altered(h5["base"], lambda f: f["/run"].attrs.__setitem__("threads", [2] * 1000)),
+             "threads", both),
+            ("results of another scene with as many nodes and tets", h5["other"], "/mesh/X",
+             restart_only)]:
+        files = {"scene.json": scene(), "r.h5": results}
+        for command in commands:
+            args = ["info", "r.h5"] if command == "info" else restart
+            add("results files", f"{command}: {name}", files, args=args,
+                names=[("r.h5", dataset)])
     return out
 
 
@@ -357,7 +453,8 @@ def classify(rc, err, names, timed_out):
     first = lines[0] if lines else ""
     if not first.startswith("depthfem: error: ") or (rc == 1 and len(lines) != 1):
         return "unlocated"
-    return "clean" if any(n in first for n in names) else "unlocated"
+    return ("clean" if any(all(t in first for t in (n if isinstance(n, tuple) else (n,)))
+                           for n in names) else "unlocated")
 
 
 def main():
@@ -367,10 +464,11 @@ def main():
     args = parser.parse_args()
     exe = str(pathlib.Path(args.depthfem).resolve())
     rows = []
-    for cls, name, files, argv, names, control in cases():
+    for cls, name, files, argv, names, control in cases(exe):
         with tempfile.TemporaryDirectory() as tmp:
             for file, text in files.items():
-                pathlib.Path(tmp, file).write_bytes(text.encode("utf-8", "surrogateescape"))
+                pathlib.Path(tmp, file).write_bytes(
+                    text if isinstance(text, bytes) else text.encode("utf-8", "surrogateescape"))
             before = {f: pathlib.Path(tmp, f).read_bytes() for f in files}
             start = time.monotonic()
             try:

@@ -269,8 +269,8 @@ TEST(RunScene, RestartedStaticRunEndsInTheSameState) {
   EXPECT_EQ(read_step_state(rest.path).x, b.x);
 }
 
-// A restart names its file in one line for every refusal: another mesh, a missing step, a
-// time-dependent analysis.
+// A restart names its file in one line for every refusal: another mesh (other counts, or as many
+// nodes and tets elsewhere), a missing step, a time-dependent analysis.
 TEST(RunScene, RestartRefusesWhatItCannotContinue) {
   const TemporaryResults bar("restart_bar"), out("restart_out");
   ASSERT_TRUE(run(load("twist_bar", {"solver.initial_increment=0.5"}), bar.path).success);
@@ -285,6 +285,9 @@ TEST(RunScene, RestartRefusesWhatItCannotContinue) {
   const std::string other = message(load("uniaxial_block"), -1);
   EXPECT_NE(other.find(bar.path), std::string::npos) << other;
   EXPECT_NE(other.find("the scene 27 and"), std::string::npos) << other;
+  const std::string thicker = message(load("twist_bar", {"bodies.0.mesh.hi=[1, 0.12, 0.12]"}), -1);
+  EXPECT_NE(thicker.find(bar.path + ": was written for another mesh: /mesh/X"), std::string::npos)
+      << thicker;
   const std::string missing = message(load("twist_bar"), 7);
   EXPECT_NE(missing.find("has no step 7"), std::string::npos) << missing;
   const std::string dynamic = message(load("falling_bars"), -1);

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Sanitizer pass: builds the file readers, the command line and the core and apps tests with
 # AddressSanitizer + UBSan (clang), runs those tests, then a bounded libFuzzer pass of each fuzz
-# target (every file reader; the command line) from its seed corpus. Any sanitizer report, crash,
-# hang or unlocated error message fails; one line per target gives the inputs run.
+# target (every file reader; the results-file readers; the command line) from its seed corpus.
+# Any sanitizer report, crash, hang or unlocated error message fails; one line per target gives
+# the inputs run.
 # Usage: tests/fuzz/run.sh [SECONDS_PER_TARGET]   (from the repository root; default 45)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -13,20 +14,25 @@ jobs=$(nproc 2>/dev/null || echo 2)
 cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=Sanitize -DCMAKE_CXX_FLAGS_SANITIZE=-O1 \
   -DCMAKE_C_FLAGS_SANITIZE=-O1 -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_C_COMPILER=clang \
   -DDEPTHFEM_SANITIZE=ON -DDEPTHFEM_BUILD_BENCH=OFF > /dev/null
-cmake --build build-sanitize -j"$jobs" --target fuzz_inputs fuzz_command_line test_core \
-  test_inputs depthfem
+cmake --build build-sanitize -j"$jobs" --target fuzz_inputs fuzz_results fuzz_command_line \
+  test_core test_inputs depthfem
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+export LSAN_OPTIONS=suppressions=$PWD/tests/fuzz/lsan.supp  # leaks inside HDF5 on damaged files
 build-sanitize/tests/test_core --gtest_brief=1
 build-sanitize/tests/test_inputs --gtest_brief=1
 bash tests/apps/test_cli.sh build-sanitize/apps/depthfem .
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-for target in inputs command_line; do
+# Text inputs up to 4 KiB; results files up to their seeds' size (82 KB, most of it chunks of
+# zeros that HDF5 allocates 4 KiB at a time).
+for target in inputs results command_line; do
   mkdir "$work/$target"
   cp tests/fuzz/corpus/"$target"/* "$work/$target/"
+  max_len=4096
+  [ "$target" = results ] && max_len=$(du -b tests/fuzz/corpus/results/* | sort -n | tail -1 | cut -f1)
   status=0
   (cd "$work" && "$OLDPWD/build-sanitize/tests/fuzz_$target" -max_total_time="$seconds" \
-    -max_len=4096 -timeout=10 -rss_limit_mb=4096 -print_final_stats=1 "$work/$target" \
+    -max_len="$max_len" -timeout=10 -rss_limit_mb=4096 -print_final_stats=1 "$work/$target" \
     > "$work/$target.log" 2>&1) || status=$?
   runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$work/$target.log")
   if ((status != 0)); then
