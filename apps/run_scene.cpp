@@ -87,6 +87,92 @@ void refuse_overwriting_inputs(const std::string& out, const std::vector<std::st
   }
 }
 
+// The modules the scene asks for; errors the scene reader could not see (a conflict found by a
+// module) name the scene.
+std::unique_ptr<SceneModel> build_scene_model(const Scene& scene, PhaseTimers& timers) {
+  try {
+    return build_model(scene, timers);
+  } catch (const InputError& e) {
+    throw InputError(scene.file + ": " + e.what());
+  }
+}
+
+// The results file of the run (none without --out), refusing to overwrite an input.
+std::unique_ptr<ResultsFile> open_results(const Scene& scene, const RunOptions& options,
+                                          const SceneModel& model, int threads) {
+  if (options.out.empty()) return nullptr;
+  std::vector<std::string> inputs = scene.inputs;
+  if (!options.restart.empty()) inputs.push_back(options.restart);
+  refuse_overwriting_inputs(options.out, inputs);
+  MaterialNames materials = material_names(scene);
+  const ResultFields fields = result_fields(scene);
+  RunInfo info{.scene_json = scene.json_text,
+               .version = kVersion,
+               .analysis = to_string(scene.analysis),
+               .threads = threads,
+               .constraint_names = {},
+               .contact_names = model.system.interface_names(),
+               .body_materials = std::move(materials.bodies),
+               .region_materials = std::move(materials.regions),
+               .fields = fields,
+               .initial_velocity = fields.velocity ? scene.initial_velocity : Points()};
+  for (const Constraint& c : scene.constraints) info.constraint_names.push_back(c.name);
+  return std::make_unique<ResultsFile>(options.out, scene.mesh, model.depth, info);
+}
+
+// Runs the scene's analysis from (result.x, start_load) through the lifecycle; a failure (a
+// solve that cannot go on, a step the results file refused, memory) is the result's message.
+void drive(const Scene& scene, SceneModel& model, StepLifecycle& lifecycle, double start_load,
+           RunResult& result) {
+  const DynamicOptions& dyn = model.dynamic_options;
+  try {
+    if (scene.analysis == Analysis::kStatic) {
+      StaticSolver(lifecycle, model.quasi_viscosity, model.static_options)
+          .run(result.x, start_load);
+    } else {
+      Points v = scene.initial_velocity;
+      switch (dyn.integrator) {
+        case Integrator::kImplicitEuler:
+        case Integrator::kNewmark:
+          ImplicitStepper(lifecycle, model.implicit, dyn).run(result.x, v);
+          break;
+        case Integrator::kSymplecticEuler:
+          SymplecticEuler(
+              lifecycle, model.lumped_mass, dyn,
+              critical_time_step(scene.mesh.X, scene.mesh.tets, scene.tet_density, scene.groups))
+              .run(result.x, v);
+          break;
+        case Integrator::kArkode:
+          ArkodeStepper(lifecycle, model.lumped_mass, dyn).run(result.x, v);
+          break;
+      }
+    }
+    result.success = true;
+  } catch (const SolveError& e) {
+    result.message = e.what();
+  } catch (const InputError& e) {  // a step the results file refused, a stepper's input check
+    result.message = e.what();
+  } catch (const std::bad_alloc&) {
+    result.message = "out of memory";
+  }
+}
+
+// Writes the timing and the outcome. A file that can no longer grow (a full disk, a file-size
+// limit) keeps its last flushed state, and still takes the outcome: the status and message
+// overwrite space they own.
+void finish_results(ResultsFile& file, RunResult& result) {
+  const auto write = [&](const auto& what) {
+    try {
+      what();
+    } catch (const InputError& e) {
+      result.message += (result.message.empty() ? "" : "; then ") + std::string(e.what());
+      result.success = false;
+    }
+  };
+  write([&] { file.write_timing(result.timers.phases()); });
+  write([&] { file.finish(result.success, result.message); });
+}
+
 }  // namespace
 
 StepState restart_state(const std::string& path, Index step, const Mesh& mesh) {
@@ -130,58 +216,35 @@ void print_timing(const PhaseTimers& timers, double total, std::ostream& out) {
                 total > 0 ? 100 * rest / total : 0.0);
 }
 
+namespace {
+
+// The starting state into x: the reference, or a completed step of an earlier run of this scene
+// (--restart); returns its load factor.
+double starting_state(const Scene& scene, const RunOptions& options, std::ostream& log, Points& x) {
+  x = scene.mesh.X;
+  if (options.restart.empty()) return 0;
+  if (scene.analysis != Analysis::kStatic)
+    throw InputError(located(options.restart, 0,
+                             "cannot restart from it: restarts are for static analyses only"));
+  const StepState state = restart_state(options.restart, options.restart_step, scene.mesh);
+  x = state.x;
+  log << "restart from step " << state.index << " of " << options.restart << " at load "
+      << format("%.6g", state.load) << std::endl;
+  return state.load;
+}
+
+}  // namespace
+
 RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream& log) {
   const ThreadBudget budget(options.threads);
   const int threads = budget.threads();
   const auto start = std::chrono::steady_clock::now();
   RunResult result;
-
-  // Build.
-  // Errors the scene reader could not see (a conflict found by a module) name the scene.
-  std::unique_ptr<SceneModel> model;
-  try {
-    model = build_model(scene, result.timers);
-  } catch (const InputError& e) {
-    throw InputError(scene.file + ": " + e.what());
-  }
+  const std::unique_ptr<SceneModel> model = build_scene_model(scene, result.timers);
   const Mesh& mesh = scene.mesh;
-  const DynamicOptions& dyn = model->dynamic_options;
-
-  // The starting state: the reference, or a completed step of an earlier run of this scene.
-  result.x = mesh.X;
-  double start_load = 0;
-  if (!options.restart.empty()) {
-    if (scene.analysis != Analysis::kStatic)
-      throw InputError(located(options.restart, 0,
-                               "cannot restart from it: restarts are for static analyses only"));
-    const StepState state = restart_state(options.restart, options.restart_step, mesh);
-    result.x = state.x;
-    start_load = state.load;
-    log << "restart from step " << state.index << " of " << options.restart << " at load "
-        << format("%.6g", start_load) << std::endl;
-  }
-
-  // Open the results.
-  std::unique_ptr<ResultsFile> file;
+  const double start_load = starting_state(scene, options, log, result.x);
+  const std::unique_ptr<ResultsFile> file = open_results(scene, options, *model, threads);
   const ResultFields fields = result_fields(scene);
-  if (!options.out.empty()) {
-    std::vector<std::string> inputs = scene.inputs;
-    if (!options.restart.empty()) inputs.push_back(options.restart);
-    refuse_overwriting_inputs(options.out, inputs);
-    MaterialNames materials = material_names(scene);
-    RunInfo info{scene.json_text,
-                 kVersion,
-                 to_string(scene.analysis),
-                 threads,
-                 {},
-                 model->system.interface_names(),
-                 std::move(materials.bodies),
-                 std::move(materials.regions),
-                 fields,
-                 fields.velocity ? scene.initial_velocity : Points()};
-    for (const Constraint& c : scene.constraints) info.constraint_names.push_back(c.name);
-    file = std::make_unique<ResultsFile>(options.out, mesh, model->depth, info);
-  }
   log << "scene " << scene.name << ": " << mesh.num_nodes() << " nodes, " << mesh.num_tets()
       << " tets, " << mesh.bodies.size() << " bodies, " << threads << " threads, linear solver "
       << to_string(model->static_options.newton.linear.kind) << ", Newton tolerance "
@@ -216,52 +279,9 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     if (options.observer) options.observer(step, x);
   };
   StepLifecycle lifecycle(model->system, model->constraints, model->lifecycle_terms(), on_step);
-  try {
-    if (scene.analysis == Analysis::kStatic) {
-      StaticSolver(lifecycle, model->quasi_viscosity, model->static_options)
-          .run(result.x, start_load);
-    } else {
-      Points v = scene.initial_velocity;
-      switch (dyn.integrator) {
-        case Integrator::kImplicitEuler:
-        case Integrator::kNewmark:
-          ImplicitStepper(lifecycle, model->implicit, dyn).run(result.x, v);
-          break;
-        case Integrator::kSymplecticEuler:
-          SymplecticEuler(lifecycle, model->lumped_mass, dyn,
-                          critical_time_step(mesh.X, mesh.tets, scene.tet_density, scene.groups))
-              .run(result.x, v);
-          break;
-        case Integrator::kArkode:
-          ArkodeStepper(lifecycle, model->lumped_mass, dyn).run(result.x, v);
-          break;
-      }
-    }
-    result.success = true;
-  } catch (const SolveError& e) {
-    result.message = e.what();
-  } catch (const InputError& e) {  // a step the results file refused, a stepper's input check
-    result.message = e.what();
-  } catch (const std::bad_alloc&) {
-    result.message = "out of memory";
-  }
-
-  // Finish.
+  drive(scene, *model, lifecycle, start_load, result);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  // A file that can no longer grow (a full disk, a file-size limit) keeps its last flushed
-  // state, and still takes the outcome: the status and message overwrite space they own.
-  if (file) {
-    const auto write = [&](const auto& what) {
-      try {
-        what();
-      } catch (const InputError& e) {
-        result.message += (result.message.empty() ? "" : "; then ") + std::string(e.what());
-        result.success = false;
-      }
-    };
-    write([&] { file->write_timing(result.timers.phases()); });
-    write([&] { file->finish(result.success, result.message); });
-  }
+  if (file) finish_results(*file, result);
   return result;
 }
 

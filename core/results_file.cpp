@@ -344,6 +344,15 @@ struct ResultsFile::State {
 
   Index num_nodes() const { return static_cast<Index>(X.rows()); }
 
+  /// Throws naming the step when it does not fit the run: out of order, past kMaxSteps, arrays
+  /// of other sizes, other contact interfaces.
+  void check_step(const StepRecord& step, const Points& x, const Points* v,
+                  const ElementFields* elements) const;
+  /// Writes every dataset of the step at the next row, then its index (a reader counts the rows
+  /// of /steps/index, so a step is in the file once its index is), each flushed; returns the row.
+  hsize_t write_rows(const StepRecord& step, const Points& x, const Points* v,
+                     const ElementFields* elements) const;
+
   /// Every dataset of /steps this run writes.
   std::vector<StepDataset> step_datasets() const {
     const ResultFields& f = info.fields;
@@ -391,8 +400,12 @@ struct ResultsFile::State {
   }
 };
 
-ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const VectorX& depth,
-                         const RunInfo& info) {
+namespace {
+
+/// Refuses what the writer cannot store: a results path with a sidecar's extension, per-node
+/// arrays of another length, node-set names that would be stored as one.
+void check_writable(const std::string& path, const Mesh& mesh, const VectorX& depth,
+                    const RunInfo& info) {
   const std::filesystem::path fs_path(path);
   for (const auto& [sidecar, dialect] : sidecar_paths(fs_path))
     if (fs_path.extension() == sidecar.extension())
@@ -416,18 +429,136 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
                                "node sets '" + it->second + "' and '" + set_name +
                                    "' would both be stored as '" + it->first + "'"));
   }
-  const std::filesystem::path directory = fs_path.parent_path(), name = fs_path.filename();
-  WriterLock lock(path, results_lock_path(path));
-  // The file is built under a new hidden name and takes its own name once readers can open it
-  // (in SWMR mode), so that a file of that name is always readable, even when the writer is
-  // killed.
-  const std::string prefix = (directory / ("." + name.string() + ".partial")).string();
+}
+
+/// A new hidden name ".NAME.partial.XXXXXXXX" beside results file `path` that no file has yet:
+/// the file is built under it and takes its own name once readers can open it (in SWMR mode),
+/// so that a file of that name is always readable, even when the writer is killed.
+std::string staging_path(const std::filesystem::path& path) {
+  const std::string prefix =
+      (path.parent_path() / ("." + path.filename().string() + ".partial")).string();
   std::string staging = random_name(prefix);
   std::error_code unused;
   for (int k = 0;
        k < 32 && std::filesystem::exists(std::filesystem::symlink_status(staging, unused)); ++k)
     staging = random_name(prefix);
-  std::vector<SidecarBlock> blocks = sidecar_blocks(mesh, info);
+  return staging;
+}
+
+/// /mesh: the scene's nodes, tets, boundary, bodies, regions, node sets and the sidecar blocks'
+/// tets.
+void write_mesh(const H5File& f, const Mesh& mesh, const VectorX& depth, const RunInfo& info,
+                const std::vector<SidecarBlock>& blocks) {
+  f.create_group("/mesh");
+  f.write_array("/mesh/X", mesh.X);
+  f.write_array("/mesh/tets", mesh.tets);
+  f.write_array("/mesh/tris", mesh.tris);
+  f.write_array("/mesh/tet_body", mesh.tet_body);
+  f.write_array("/mesh/tri_body", mesh.tri_body);
+  f.write_array("/mesh/tri_tet", mesh.tri_tet);
+  if (depth.size() != 0) f.write_array("/mesh/depth", depth);
+  std::vector<std::string> body_names;
+  for (const Body& body : mesh.bodies) body_names.push_back(body.name);
+  f.write_strings("/mesh/body_names", body_names);
+  f.write_strings("/mesh/body_materials", info.body_materials);
+  IndexVector tet_region = IndexVector::Constant(mesh.num_tets(), -1);
+  std::vector<std::string> region_names;
+  for (const Body& body : mesh.bodies) {
+    for (const Region& r : body.regions) {
+      tet_region.segment(r.first_tet, r.num_tets).setConstant(Index(region_names.size()));
+      region_names.push_back(r.name);
+    }
+  }
+  f.write_array("/mesh/tet_region", tet_region);
+  f.write_strings("/mesh/region_names", region_names);
+  f.write_strings("/mesh/region_materials", info.region_materials);
+  if (!mesh.node_sets.empty()) {
+    f.create_group("/mesh/node_sets");
+    for (const auto& [set_name, nodes] : mesh.node_sets) {
+      f.write_array("/mesh/node_sets/" + stored_set_name(set_name),
+                    Eigen::Map<const IndexVector>(nodes.data(), Eigen::Index(nodes.size())));
+    }
+  }
+  if (blocks.size() > 1) {
+    f.create_group("/mesh/blocks");
+    for (const SidecarBlock& block : blocks) {
+      const std::string group = block.tets.substr(0, block.tets.rfind('/'));
+      f.create_group(group);
+      f.set_string_attribute(group, "name", block.name);
+      const TetIndices local =
+          (mesh.tets.middleRows(block.first_tet, block.num_tets).array() - block.first_node)
+              .matrix();
+      f.write_array(block.tets, local);
+    }
+  }
+}
+
+/// /run: the scene, version, threads, analysis, status "running", the reaction and contact rows'
+/// names.
+void write_run(const H5File& f, const RunInfo& info) {
+  f.create_group("/run");
+  f.set_string_attribute("/run", "scene", info.scene_json);
+  f.set_string_attribute("/run", "version", info.version);
+  f.set_attribute("/run", "threads", info.threads);
+  f.set_string_attribute("/run", "analysis", info.analysis);
+  f.create_text("/run/status", kStatusBytes);
+  f.write_text("/run/status", "running");
+  f.create_text("/run/message", kMessageBytes);
+  f.write_strings("/run/constraint_names", info.constraint_names);
+  f.write_strings("/run/contact_names", info.contact_names);
+}
+
+/// /reference: the state the first step starts from, with the fields every step will hold.
+void write_reference(const H5File& f, const Mesh& mesh, const RunInfo& info) {
+  const ResultFields& fields = info.fields;
+  const hsize_t nodes = hsize_t(mesh.num_nodes()), tets = hsize_t(mesh.num_tets()),
+                tris = hsize_t(mesh.num_tris());
+  f.create_group("/reference");
+  f.create_row_view("/reference/x", "/mesh/X", 0, nodes);
+  if (fields.displacement) f.create_zeros("/reference/displacement", {nodes, 3});
+  if (fields.velocity) f.write_array("/reference/v", info.initial_velocity);
+  if (fields.stress) {
+    f.create_zeros("/reference/stress", {tets, 6});
+    f.create_zeros("/reference/von_mises", {tets});
+  }
+  if (fields.strain) {
+    f.create_zeros("/reference/strain", {tets, 6});
+    f.write_array("/reference/volume_ratio", VectorX::Ones(mesh.num_tets()).eval());
+  }
+  if (fields.contact) {
+    for (const char* field : {"contact_pressure", "contact_gap", "contact_fraction"})
+      f.create_zeros(std::string("/reference/") + field, {tris});
+    f.create_zeros("/reference/contact_traction", {tris, 3});
+  }
+}
+
+/// /steps with an empty dataset per step field, and /timing; returns the bytes a step may add
+/// to the file besides its residuals: its rows, a new chunk of each small dataset (4 KiB), the
+/// chunk indices (up to a 1024-entry page of each) and other metadata.
+hsize_t create_step_datasets(const H5File& f, const std::vector<StepDataset>& datasets) {
+  f.create_group("/steps");
+  hsize_t reserve = 256 * 1024;
+  for (const StepDataset& d : datasets) {
+    f.create_rows("/steps/" + d.name, d.type, d.row);
+    hsize_t bytes = H5Tget_size(d.type);
+    for (const hsize_t n : d.row) bytes *= n;
+    reserve += bytes + 36 * 1024;
+  }
+  f.create_group("/timing");
+  f.create_text_rows("/timing/phases", kPhaseBytes);
+  f.create_rows("/timing/seconds", H5Type<double>::file(), {});
+  return reserve;
+}
+
+}  // namespace
+
+ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const VectorX& depth,
+                         const RunInfo& info) {
+  check_writable(path, mesh, depth, info);
+  const std::filesystem::path fs_path(path);
+  WriterLock lock(path, results_lock_path(path));
+  const std::string staging = staging_path(fs_path);
+  const std::vector<SidecarBlock> blocks = sidecar_blocks(mesh, info);
   state_ = std::make_unique<State>(State{std::move(lock),
                                          H5File::create(staging, path),
                                          mesh.X,
@@ -438,98 +569,12 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
                                          {}});
   State& s = *state_;
   H5File& f = s.file;
-  const ResultFields& fields = info.fields;
   bool renamed = false;
   try {
-    f.create_group("/mesh");
-    f.write_array("/mesh/X", mesh.X);
-    f.write_array("/mesh/tets", mesh.tets);
-    f.write_array("/mesh/tris", mesh.tris);
-    f.write_array("/mesh/tet_body", mesh.tet_body);
-    f.write_array("/mesh/tri_body", mesh.tri_body);
-    f.write_array("/mesh/tri_tet", mesh.tri_tet);
-    if (depth.size() != 0) f.write_array("/mesh/depth", depth);
-    std::vector<std::string> body_names;
-    for (const Body& body : mesh.bodies) body_names.push_back(body.name);
-    f.write_strings("/mesh/body_names", body_names);
-    f.write_strings("/mesh/body_materials", info.body_materials);
-    IndexVector tet_region = IndexVector::Constant(mesh.num_tets(), -1);
-    std::vector<std::string> region_names;
-    for (const Body& body : mesh.bodies) {
-      for (const Region& r : body.regions) {
-        tet_region.segment(r.first_tet, r.num_tets).setConstant(Index(region_names.size()));
-        region_names.push_back(r.name);
-      }
-    }
-    f.write_array("/mesh/tet_region", tet_region);
-    f.write_strings("/mesh/region_names", region_names);
-    f.write_strings("/mesh/region_materials", info.region_materials);
-    if (!mesh.node_sets.empty()) {
-      f.create_group("/mesh/node_sets");
-      for (const auto& [set_name, nodes] : mesh.node_sets) {
-        f.write_array("/mesh/node_sets/" + stored_set_name(set_name),
-                      Eigen::Map<const IndexVector>(nodes.data(), Eigen::Index(nodes.size())));
-      }
-    }
-    if (blocks.size() > 1) {
-      f.create_group("/mesh/blocks");
-      for (const SidecarBlock& block : blocks) {
-        const std::string group = block.tets.substr(0, block.tets.rfind('/'));
-        f.create_group(group);
-        f.set_string_attribute(group, "name", block.name);
-        const TetIndices local =
-            (mesh.tets.middleRows(block.first_tet, block.num_tets).array() - block.first_node)
-                .matrix();
-        f.write_array(block.tets, local);
-      }
-    }
-
-    f.create_group("/run");
-    f.set_string_attribute("/run", "scene", info.scene_json);
-    f.set_string_attribute("/run", "version", info.version);
-    f.set_attribute("/run", "threads", info.threads);
-    f.set_string_attribute("/run", "analysis", info.analysis);
-    f.create_text("/run/status", kStatusBytes);
-    f.write_text("/run/status", "running");
-    f.create_text("/run/message", kMessageBytes);
-    f.write_strings("/run/constraint_names", info.constraint_names);
-    f.write_strings("/run/contact_names", info.contact_names);
-
-    // The reference state: what the first step starts from.
-    const hsize_t nodes = hsize_t(mesh.num_nodes()), tets = hsize_t(mesh.num_tets()),
-                  tris = hsize_t(mesh.num_tris());
-    f.create_group("/reference");
-    f.create_row_view("/reference/x", "/mesh/X", 0, nodes);
-    if (fields.displacement) f.create_zeros("/reference/displacement", {nodes, 3});
-    if (fields.velocity) f.write_array("/reference/v", info.initial_velocity);
-    if (fields.stress) {
-      f.create_zeros("/reference/stress", {tets, 6});
-      f.create_zeros("/reference/von_mises", {tets});
-    }
-    if (fields.strain) {
-      f.create_zeros("/reference/strain", {tets, 6});
-      f.write_array("/reference/volume_ratio", VectorX::Ones(mesh.num_tets()).eval());
-    }
-    if (fields.contact) {
-      for (const char* field : {"contact_pressure", "contact_gap", "contact_fraction"})
-        f.create_zeros(std::string("/reference/") + field, {tris});
-      f.create_zeros("/reference/contact_traction", {tris, 3});
-    }
-
-    f.create_group("/steps");
-    // What a step may add to the file: its rows; a new chunk of each small dataset (4 KiB); the
-    // chunk indices (up to a 1024-entry page of each) and other metadata.
-    s.step_reserve = 256 * 1024;
-    for (const StepDataset& d : s.step_datasets()) {
-      f.create_rows("/steps/" + d.name, d.type, d.row);
-      hsize_t bytes = H5Tget_size(d.type);
-      for (const hsize_t n : d.row) bytes *= n;
-      s.step_reserve += bytes + 36 * 1024;
-    }
-    f.create_group("/timing");
-    f.create_text_rows("/timing/phases", kPhaseBytes);
-    f.create_rows("/timing/seconds", H5Type<double>::file(), {});
-
+    write_mesh(f, mesh, depth, info, blocks);
+    write_run(f, info);
+    write_reference(f, mesh, info);
+    s.step_reserve = create_step_datasets(f, s.step_datasets());
     f.start_swmr_write();
     f.flush();
     f.rename(path);
@@ -537,8 +582,8 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
     for (const auto& [sidecar, dialect] : sidecar_paths(fs_path)) {
       s.sidecars.emplace_back(
           sidecar.string(),
-          SidecarLayout{name.string(), dialect, mesh.num_nodes(), mesh.num_tets(), mesh.num_tris(),
-                        blocks, depth.size() != 0, fields},
+          SidecarLayout{fs_path.filename().string(), dialect, mesh.num_nodes(), mesh.num_tets(),
+                        mesh.num_tris(), blocks, depth.size() != 0, info.fields},
           SidecarStep{-1, 0.0, {}});
     }
   } catch (const InputError& e) {
@@ -556,11 +601,10 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
 
 ResultsFile::~ResultsFile() = default;
 
-void ResultsFile::append_step(const StepRecord& step, const Points& x, const Points* v,
-                              const ElementFields* elements) {
-  State& s = *state_;
-  const H5File& f = s.file;
-  const ResultFields& fields = s.info.fields;
+void ResultsFile::State::check_step(const StepRecord& step, const Points& x, const Points* v,
+                                    const ElementFields* elements) const {
+  const H5File& f = file;
+  const ResultFields& fields = info.fields;
   const std::string what = "step " + std::to_string(step.index);
   const auto expect_rows = [&](const char* name, Eigen::Index rows, Eigen::Index expected,
                                const char* of) {
@@ -568,40 +612,45 @@ void ResultsFile::append_step(const StepRecord& step, const Points& x, const Poi
       f.fail(what + ": " + name + " has " + std::to_string(rows) + " rows, expected " +
              std::to_string(expected) + " (" + of + ")");
   };
-  const Eigen::Index num_tets = s.num_tets;
-  if (step.index <= s.last_index)
+  const Eigen::Index tets = num_tets;
+  if (step.index <= last_index)
     f.fail(what + ": steps must come in increasing order (the last one written was " +
-           std::to_string(s.last_index) + ")");
-  if (s.num_steps >= kMaxSteps)
+           std::to_string(last_index) + ")");
+  if (num_steps >= kMaxSteps)
     f.fail(what + ": a results file holds at most " + std::to_string(kMaxSteps) + " steps");
-  expect_rows("x", x.rows(), s.num_nodes(), "#nodes");
+  expect_rows("x", x.rows(), num_nodes(), "#nodes");
   if (bool(v) != fields.velocity)
     f.fail(what +
            (fields.velocity ? ": velocities missing" : ": velocities given to a run without"));
-  if (v) expect_rows("v", v->rows(), s.num_nodes(), "#nodes");
-  expect_rows("reactions", step.reactions.rows(), Eigen::Index(s.info.constraint_names.size()),
+  if (v) expect_rows("v", v->rows(), num_nodes(), "#nodes");
+  expect_rows("reactions", step.reactions.rows(), Eigen::Index(info.constraint_names.size()),
               "#constraints");
   if ((fields.stress || fields.strain) && !elements) f.fail(what + ": element fields missing");
   if (fields.stress) {
-    expect_rows("stress", elements->stress.rows(), num_tets, "#tets");
-    expect_rows("von_mises", elements->von_mises.rows(), num_tets, "#tets");
+    expect_rows("stress", elements->stress.rows(), tets, "#tets");
+    expect_rows("von_mises", elements->von_mises.rows(), tets, "#tets");
   }
   if (fields.strain) {
-    expect_rows("strain", elements->strain.rows(), num_tets, "#tets");
-    expect_rows("volume_ratio", elements->volume_ratio.rows(), num_tets, "#tets");
+    expect_rows("strain", elements->strain.rows(), tets, "#tets");
+    expect_rows("volume_ratio", elements->volume_ratio.rows(), tets, "#tets");
   }
-  if (fields.contact) expect_rows("surface", step.surface.area.rows(), s.tris.rows(), "#tris");
+  if (fields.contact) expect_rows("surface", step.surface.area.rows(), tris.rows(), "#tris");
   std::vector<std::string> contact_names;
   for (const InterfaceForce& c : step.contact) contact_names.push_back(c.name);
-  if (contact_names != s.info.contact_names)
+  if (contact_names != info.contact_names)
     f.fail(what + ": its contact interfaces are not those the run declared");
+}
 
+hsize_t ResultsFile::State::write_rows(const StepRecord& step, const Points& x, const Points* v,
+                                       const ElementFields* elements) const {
+  const H5File& f = file;
+  const ResultFields& fields = info.fields;
   // Every dataset of the step at row k, then the index: a reader counts the rows of
   // /steps/index, so a step is in the file once its index is. A full disk stops the run before
   // the step is begun.
   const H5File::Reservation reserved =
-      f.reserve(s.step_reserve + step.residuals.size() * sizeof(double));
-  const hsize_t k = hsize_t(s.num_steps);
+      f.reserve(step_reserve + step.residuals.size() * sizeof(double));
+  const hsize_t k = hsize_t(num_steps);
   f.write_row("/steps/load", k, step.load);
   f.write_row("/steps/settling", k, std::int32_t(step.settling));
   f.write_row("/steps/newton_iterations", k, std::int32_t(step.newton_iterations));
@@ -609,11 +658,11 @@ void ResultsFile::append_step(const StepRecord& step, const Points& x, const Poi
   f.write_row("/steps/energy", k, step.energy);
   f.write_row("/steps/seconds", k, step.seconds);
   f.write_row("/steps/residual_count", k, std::int32_t(step.residuals.size()));
-  f.write_rows("/steps/residuals", s.num_residuals, step.residuals.size(), H5Type<double>::memory(),
+  f.write_rows("/steps/residuals", num_residuals, step.residuals.size(), H5Type<double>::memory(),
                step.residuals.data());
   f.write_row("/steps/reactions", k, step.reactions);
   f.write_row("/steps/x", k, x);
-  if (fields.displacement) f.write_row("/steps/displacement", k, (x - s.X).eval());
+  if (fields.displacement) f.write_row("/steps/displacement", k, (x - X).eval());
   if (v) {
     f.write_row("/steps/v", k, *v);
     f.write_row("/steps/kinetic_energy", k, step.kinetic_energy);
@@ -632,7 +681,7 @@ void ResultsFile::append_step(const StepRecord& step, const Points& x, const Poi
     f.write_row("/steps/contact_force_magnitudes", k, magnitudes);
     f.write_row("/steps/contact_areas", k, areas);
   }
-  if (s.depth)
+  if (depth)
     f.write_row("/steps/penetration", k,
                 step.penetration.value_or(std::numeric_limits<double>::quiet_NaN()));
   if (fields.stress) {
@@ -644,7 +693,7 @@ void ResultsFile::append_step(const StepRecord& step, const Points& x, const Poi
     f.write_row("/steps/volume_ratio", k, elements->volume_ratio);
   }
   if (fields.contact) {
-    const SurfaceFields surface = surface_fields(s.tris, x, step.surface);
+    const SurfaceFields surface = surface_fields(tris, x, step.surface);
     f.write_row("/steps/contact_pressure", k, surface.pressure);
     f.write_row("/steps/contact_traction", k, surface.traction);
     f.write_row("/steps/contact_gap", k, surface.gap);
@@ -653,13 +702,21 @@ void ResultsFile::append_step(const StepRecord& step, const Points& x, const Poi
   f.flush();
   f.write_row("/steps/index", k, std::int32_t(step.index));
   f.flush();
+  return k;
+}
+
+void ResultsFile::append_step(const StepRecord& step, const Points& x, const Points* v,
+                              const ElementFields* elements) {
+  State& s = *state_;
+  s.check_step(step, x, v, elements);
+  const hsize_t k = s.write_rows(step, x, v, elements);
   ++s.num_steps;
   s.last_index = step.index;
   s.num_residuals += step.residuals.size();
   // ParaView shows one state per distinct time: settling steps, all at load 1, follow at 2, 3, ...
   const double time = step.settling ? 1.0 + double(++s.settling_steps) : step.load;
   const SidecarStep entry{Index(k), time,
-                          step_values(step, fields.velocity, s.info.constraint_names)};
+                          step_values(step, s.info.fields.velocity, s.info.constraint_names)};
   for (XdmfSidecar& sidecar : s.sidecars) sidecar.append(entry);
 }
 
