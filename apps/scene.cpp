@@ -783,7 +783,7 @@ void add_body(const BodySpec& b, Scene& scene, std::vector<std::string>& materia
         const auto it = std::ranges::find(body.regions, m.region, &Region::name);
         tets = it != body.regions.end() ? *it : Region{};
       }
-      ElasticGroup g{m.model, {}, Points()};
+      ElasticGroup g{.material = m.model, .tets = {}, .fibers = Points()};
       for (Index t = 0; t < tets.num_tets; ++t) g.tets.push_back(tets.first_tet + t);
       if (material_uses_fiber(g.material))
         g.fibers = m.fiber.transpose().replicate(static_cast<Index>(g.tets.size()), 1);

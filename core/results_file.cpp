@@ -559,14 +559,13 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
   WriterLock lock(path, results_lock_path(path));
   const std::string staging = staging_path(fs_path);
   const std::vector<SidecarBlock> blocks = sidecar_blocks(mesh, info);
-  state_ = std::make_unique<State>(State{std::move(lock),
-                                         H5File::create(staging, path),
-                                         mesh.X,
-                                         mesh.num_tets(),
-                                         mesh.tris,
-                                         info,
-                                         depth.size() != 0,
-                                         {}});
+  state_ = std::make_unique<State>(State{.lock = std::move(lock),
+                                         .file = H5File::create(staging, path),
+                                         .X = mesh.X,
+                                         .num_tets = mesh.num_tets(),
+                                         .tris = mesh.tris,
+                                         .info = info,
+                                         .depth = depth.size() != 0});
   State& s = *state_;
   H5File& f = s.file;
   bool renamed = false;
@@ -580,11 +579,16 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
     f.rename(path);
     renamed = true;
     for (const auto& [sidecar, dialect] : sidecar_paths(fs_path)) {
-      s.sidecars.emplace_back(
-          sidecar.string(),
-          SidecarLayout{fs_path.filename().string(), dialect, mesh.num_nodes(), mesh.num_tets(),
-                        mesh.num_tris(), blocks, depth.size() != 0, info.fields},
-          SidecarStep{-1, 0.0, {}});
+      s.sidecars.emplace_back(sidecar.string(),
+                              SidecarLayout{.h5_name = fs_path.filename().string(),
+                                            .dialect = dialect,
+                                            .num_nodes = mesh.num_nodes(),
+                                            .num_tets = mesh.num_tets(),
+                                            .num_tris = mesh.num_tris(),
+                                            .blocks = blocks,
+                                            .depth = depth.size() != 0,
+                                            .fields = info.fields},
+                              SidecarStep{.row = -1, .time = 0.0, .values = {}});
     }
   } catch (const InputError& e) {
     std::error_code ignored;
@@ -715,8 +719,10 @@ void ResultsFile::append_step(const StepRecord& step, const Points& x, const Poi
   s.num_residuals += step.residuals.size();
   // ParaView shows one state per distinct time: settling steps, all at load 1, follow at 2, 3, ...
   const double time = step.settling ? 1.0 + double(++s.settling_steps) : step.load;
-  const SidecarStep entry{Index(k), time,
-                          step_values(step, s.info.fields.velocity, s.info.constraint_names)};
+  const SidecarStep entry{
+      .row = Index(k),
+      .time = time,
+      .values = step_values(step, s.info.fields.velocity, s.info.constraint_names)};
   for (XdmfSidecar& sidecar : s.sidecars) sidecar.append(entry);
 }
 
