@@ -10,8 +10,8 @@ set -euo pipefail
 cd "$(dirname "$0")"
 
 packages=(build-essential cmake pkg-config libeigen3-dev libtbb-dev libsundials-dev libhdf5-dev
-          libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libsuitesparse-dev
-          libopenblas-dev petsc-dev clang-format clang libclang-rt-14-dev
+          libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libcli11-dev
+          libsuitesparse-dev libopenblas-dev petsc-dev clang-format clang libclang-rt-14-dev
           python3-h5py python3-numpy python3-matplotlib)
 missing=()
 for p in "${packages[@]}"; do

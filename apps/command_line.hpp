@@ -8,7 +8,7 @@
 
 namespace depthfem {
 
-/// The usage text, printed by `--help` and after every usage error.
+/// The usage text, printed after every usage error and at the head of `--help`.
 extern const char* const kCommandLineUsage;
 
 /// `text` on one line: control characters (a newline in a key or a file name) written as \xNN.
@@ -22,8 +22,9 @@ enum class CommandStage {
 };
 
 /// Runs `depthfem ARGS...` (`args` without the program name), writing what it prints to `out`
-/// and errors to `err`, and returns the exit status: 0 success, 1 input or solver error (one line
-/// "depthfem: error: ..."), 2 usage error (that line, then kCommandLineUsage).
+/// and errors to `err`, and returns the exit status: 0 success or help (`--help`, `-h`: the help
+/// on `out`), 1 input or solver error (one line "depthfem: error: ..."), 2 usage error (that line,
+/// then kCommandLineUsage).
 int command_line(const std::vector<std::string>& args, std::ostream& out, std::ostream& err,
                  CommandStage stage = CommandStage::kExecute);
 
