@@ -7,6 +7,8 @@
 #include <string>
 #include <type_traits>
 
+#include "integrators/solvers/thread_budget.hpp"
+
 namespace depthfem {
 
 namespace {
@@ -170,6 +172,8 @@ AmgSolver::~AmgSolver() = default;
 
 AmgSolveStats AmgSolver::solve(const BlockSparseMatrix& M, const VectorX& rhs, VectorX& sol,
                                const Points* positions) {
+  // PETSc's vector operations call BLAS, whose threads would change the sums with their count.
+  const SerialBlas serial;
   Impl& s = *impl_;
   if (s.version != M.pattern_version()) {
     s.set_up(M);

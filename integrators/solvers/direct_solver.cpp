@@ -2,6 +2,7 @@
 
 #include <cholmod.h>
 
+#include "integrators/solvers/supernodal_cholesky.hpp"
 #include "integrators/solvers/thread_budget.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -96,11 +97,12 @@ struct DirectSolver::Impl {
   ScalarPattern pattern;        // upper triangle by rows = lower triangle by columns
   cholmod_sparse* A = nullptr;  // lower triangle (stype -1), values refreshed every solve
   DirectAnalysis analysis;
-  std::vector<int> perm;           // fill-reducing dof ordering
-  std::vector<Index> diagonal;     // position of every diagonal entry in A->x
-  cholmod_factor* llt = nullptr;   // supernodal LL^T
-  cholmod_factor* ldlt = nullptr;  // simplicial LDL^T, analysed on first need
-  bool llt_valid = false;          // llt holds the factor of an earlier matrix of this pattern
+  std::vector<int> perm;                            // fill-reducing dof ordering
+  std::vector<Index> diagonal;                      // position of every diagonal entry in A->x
+  cholmod_factor* llt = nullptr;                    // supernodal LL^T
+  std::unique_ptr<SupernodalCholesky> llt_numeric;  // fills llt
+  cholmod_factor* ldlt = nullptr;                   // simplicial LDL^T, analysed on first need
+  bool llt_valid = false;  // llt holds the factor of an earlier matrix of this pattern
   cholmod_dense *X = nullptr, *Y = nullptr, *E = nullptr;  // solve workspace
 
   explicit Impl(DirectSolverOptions o) : options(o) {
@@ -116,6 +118,7 @@ struct DirectSolver::Impl {
     cholmod_finish(&c);
   }
   void release_pattern() {
+    llt_numeric.reset();
     cholmod_free_sparse(&A, &c);
     cholmod_free_factor(&llt, &c);
     cholmod_free_factor(&ldlt, &c);
@@ -131,7 +134,8 @@ struct DirectSolver::Impl {
   void analyse(const BlockSparseMatrix& M);
   std::vector<int> node_ordering(cholmod_sparse* G, DirectOrdering ordering);
   cholmod_factor* analyse_with(int supernodal);
-  bool factorize(cholmod_factor* L, double s);
+  bool factorize_llt();
+  bool factorize_ldlt();
   bool factorize_shifted(const VectorX& d, const VectorX& weight, double s);
   void solve_with(cholmod_factor* L, const VectorX& b, VectorX& x);
   bool reuse(const BlockSparseMatrix& M, const VectorX& b, VectorX& x, double tolerance,
@@ -202,23 +206,31 @@ void DirectSolver::Impl::analyse(const BlockSparseMatrix& M) {
       analysis = amd;
     }
   }
+  llt_numeric = std::make_unique<SupernodalCholesky>(*A, *llt, c);
   version = M.pattern_version();
 }
 
-// Factors A + s I into L; false when it is not positive definite (LL^T) or has a zero pivot.
-bool DirectSolver::Impl::factorize(cholmod_factor* L, double s) {
-  double beta[2] = {s, 0};
-  const SerialBlas serial(analysis.flops < options.threaded_factor_flops);
-  cholmod_factorize_p(A, beta, nullptr, 0, L, &c);
-  check("factorization");
-  return L->minor == L->n;
+// Factors A into llt; false when it is not positive definite. Not cholmod_factorize: that
+// hands the large dense blocks to OpenBLAS's threads, which make the factor depend on the
+// thread count (SupernodalCholesky shares them by TBB, each on one BLAS thread).
+bool DirectSolver::Impl::factorize_llt() {
+  const SerialBlas serial;
+  return llt_numeric->factorize(*A, *llt);
 }
 
-// Factors A + s diag(weight) into llt, where d holds the diagonal of A; false as factorize.
+// Factors A into ldlt (simplicial: no BLAS); false when it has a zero pivot.
+bool DirectSolver::Impl::factorize_ldlt() {
+  if (!ldlt) ldlt = analyse_with(CHOLMOD_SIMPLICIAL);
+  cholmod_factorize(A, ldlt, &c);
+  check("factorization");
+  return ldlt->minor == ldlt->n;
+}
+
+// Factors A + s diag(weight) into llt, where d holds the diagonal of A; false as factorize_llt.
 bool DirectSolver::Impl::factorize_shifted(const VectorX& d, const VectorX& weight, double s) {
   double* values = static_cast<double*>(A->x);
   for (size_t j = 0; j < diagonal.size(); ++j) values[diagonal[j]] = d(j) + s * weight(j);
-  return factorize(llt, 0);
+  return factorize_llt();
 }
 
 void DirectSolver::Impl::solve_with(cholmod_factor* L, const VectorX& b, VectorX& x) {
@@ -293,12 +305,11 @@ DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& 
   M.scalar_values(s.pattern, static_cast<double*>(s.A->x));
   stats.factored = true;
   s.llt_valid = false;
-  if (s.factorize(s.llt, 0)) {
+  if (s.factorize_llt()) {
     s.llt_valid = true;
     s.solve_with(s.llt, b, x);
   } else if (s.options.indefinite == IndefiniteFallback::kLdlt) {
-    if (!s.ldlt) s.ldlt = s.analyse_with(CHOLMOD_SIMPLICIAL);
-    if (!s.factorize(s.ldlt, 0)) return stats;
+    if (!s.factorize_ldlt()) return stats;
     s.solve_with(s.ldlt, b, x);
     stats.ldlt = true;
   } else {

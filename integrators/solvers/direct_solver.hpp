@@ -28,10 +28,6 @@ struct DirectSolverOptions {
   /// of the last one, to |b - A x| <= reuse_tolerance |b|; factor it only when CG needs more
   /// iterations than the factorisation is worth (see DirectSolver). 0: always factor.
   double reuse_tolerance = 1e-3;
-  /// Factorisations of fewer flops run BLAS on the calling thread (SerialBlas), larger ones on
-  /// the thread budget. The 80 x 8 x 8 sag bar (1.7e9 flops) was no faster on two threads than
-  /// on one, and paid in system time; the 160 x 16 x 16 cantilever (1.1e11) gained 4-6 % wall.
-  double threaded_factor_flops = 3e10;
 };
 
 /// The symbolic analysis of one pattern.

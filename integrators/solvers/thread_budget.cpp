@@ -29,16 +29,16 @@ const OpenBlas& openblas() {
   return entries;
 }
 
-void set_blas_threads(int threads) {
-  // OpenBLAS's pthread pool, started when the library is loaded, lets its threads spin for
-  // 2^28 cycles (0.1 s) after every call before they sleep: after each factorisation they take
-  // the cores from the assembly that follows. The shortest spin it allows (2^4 cycles) comes
-  // from its environment variable (unless the user set one), read again; the pool is stopped
-  // and starts with it at the next call allowed more than one thread (never, with one).
+// OpenBLAS on the calling thread, its pthread pool (started when the library is loaded) stopped.
+// Should anything later allow it more threads, the pool starts again with the shortest spin
+// after a call that OpenBLAS allows (2^4 cycles, not 2^28, 0.1 s, in which its threads would
+// take the cores from the work that follows), from its environment variable (unless the user
+// set one), read again.
+void serial_blas() {
   setenv("OPENBLAS_THREAD_TIMEOUT", "4", 0);
   const OpenBlas& blas = openblas();
   if (blas.read_env) blas.read_env();
-  if (blas.set_threads) blas.set_threads(threads);
+  if (blas.set_threads) blas.set_threads(1);
   if (blas.stop) blas.stop();
 }
 
@@ -52,7 +52,7 @@ ThreadBudget::ThreadBudget(int threads)
   // parallel level keeps them on the calling thread.
   omp_set_num_threads(threads_);
   omp_set_max_active_levels(0);
-  set_blas_threads(threads_);
+  serial_blas();
 }
 
 ThreadBudget::~ThreadBudget() = default;

@@ -7,19 +7,17 @@
 
 namespace depthfem {
 
-/// While alive, at most `threads` threads work at a time. TBB (assembly, products, contact
-/// search) runs at most that many. OpenBLAS, which the direct solver's supernodal factorisation
-/// calls for factorisations above DirectSolverOptions::threaded_factor_flops, runs as many in
-/// its own pool (smaller ones and the triangular solves run it on one thread, SerialBlas); that
-/// pool and TBB's never work at the same time (the factorisation waits for the assembly and the
-/// reverse). CHOLMOD's OpenMP loops (clearing and filling supernodes: memory bound, four threads
-/// when left alone) run on the calling thread. With one thread no second thread runs: the pool
-/// OpenBLAS starts when it is loaded is stopped. PETSc (AMG) runs on the calling thread, but
-/// for its vector operations, which it hands to BLAS: OpenBLAS shares those over more than
-/// 10,000 entries with its pool (on a 16-core machine no slower or faster than on the calling
-/// thread alone: bench/results/thread_scaling_16core.md). MPI, which PETSc starts on first use,
-/// adds a helper thread of its own (Open MPI as an isolated singleton: one, asleep while a run
-/// computes). The command line, the benchmarks and the tests all set their threads through this.
+/// While alive, at most `threads` threads work at a time, and the results do not depend on
+/// how many: TBB (assembly, products, contact search, the direct solver's factorisation) runs at
+/// most that many, on work cut by its sizes alone. BLAS runs on the calling thread: a threaded
+/// BLAS cuts its work by its thread count (OpenBLAS gives other bits on two threads than on
+/// one), so the factorisation shares its dense blocks in tiles of its own (solvers/tiled_blas.hpp), and
+/// PETSc's vector operations (AMG), which OpenBLAS would share over more than 10,000 entries,
+/// stay on the calling thread (no slower: bench/results/thread_scaling_16core.md). OpenBLAS's
+/// pool, started when the library is loaded, is stopped. CHOLMOD's OpenMP loops (four threads
+/// when left alone) run on the calling thread. MPI, which PETSc starts on first use, adds a helper
+/// thread of its own (Open MPI as an isolated singleton: one, asleep while a run computes). The
+/// command line, the benchmarks and the tests all set their threads through this.
 class ThreadBudget {
  public:
   /// `threads` <= 0: one per core.
@@ -36,10 +34,8 @@ class ThreadBudget {
 };
 
 /// While alive (and `serial`), BLAS runs on the calling thread (OpenBLAS; with another BLAS,
-/// nothing changes). The direct solver's triangular solves and small factorisations call BLAS
-/// on blocks too small to share: the pool's threads, woken for each call and put to sleep after
-/// it, cost more in the kernel than they save (the 80 x 8 x 8 sag bar at two threads: linear
-/// solve 2.7 s, 1.5 s of it system time, against 1.5-1.7 s with this around them).
+/// nothing changes), also outside a ThreadBudget. The direct and AMG solvers hold one around
+/// their BLAS calls: a BLAS thread count other than one would make their results depend on it.
 class SerialBlas {
  public:
   explicit SerialBlas(bool serial = true);

@@ -11,18 +11,19 @@
 #include "integrators/solvers/amg_solver.hpp"
 #include "integrators/solvers/direct_solver.hpp"
 #include "integrators/solvers/linear_solver.hpp"
+#include "integrators/solvers/thread_budget.hpp"
 
 namespace depthfem {
 namespace {
 
-// Stiffness of a 6 x 3 x 3 Mooney-Rivlin block clamped at x = 0, at a deformed state, with a
-// right-hand side of random forces; `shift` subtracts a multiple of the identity.
+// Stiffness of a 6 x 3 x 3 (or `cells`) Mooney-Rivlin block clamped at x = 0, at a deformed
+// state, with a right-hand side of random forces; `shift` subtracts a multiple of the identity.
 struct Problem {
   BlockSparseMatrix A;
   VectorX b;
 };
-Problem clamped_block(double shift) {
-  const TetMesh m = box_mesh({Vec3::Zero(), Vec3(2, 1, 1), Eigen::Vector3i(6, 3, 3)});
+Problem clamped_block(double shift, const Eigen::Vector3i& cells = {6, 3, 3}) {
+  const TetMesh m = box_mesh({Vec3::Zero(), Vec3(2, 1, 1), cells});
   std::vector<Index> all(m.tets.rows());
   std::iota(all.begin(), all.end(), 0);
   Elasticity e(m.X, m.tets, {{MooneyRivlin{4e3, 1e3, 2e4}, all, Points()}});
@@ -257,6 +258,21 @@ TEST(LinearSolver, AmgSolvesTheUpdatedMatrixWithEitherPetscType) {
     EXPECT_TRUE(amg.solve(p.A, p.b, x, nullptr).converged);
     EXPECT_LE(residual(p.A, x, p.b), 1e-10) << (distributed ? "MPIAIJ" : "sequential AIJ");
   }
+}
+
+// PETSc's vector operations call BLAS, which OpenBLAS shares among its threads over more than
+// 10,000 entries (its dot products then sum per thread): under a budget of one thread and of
+// two, AMG-CG on 11,907 rows must give the same bits.
+TEST(LinearSolver, AmgGivesTheSameBitsOnOneAndTwoThreads) {
+  const Problem p = clamped_block(0.0, {48, 8, 8});
+  ASSERT_GT(p.b.size(), 10000);
+  VectorX x[2];
+  for (const int threads : {1, 2}) {
+    const ThreadBudget budget(threads);
+    AmgSolver amg({AmgPreconditioner::kGamg, 1e-10, 500, false});
+    EXPECT_TRUE(amg.solve(p.A, p.b, x[threads - 1], nullptr).converged);
+  }
+  EXPECT_TRUE(x[0] == x[1]) << "apart by up to " << (x[0] - x[1]).cwiseAbs().maxCoeff();
 }
 
 }  // namespace

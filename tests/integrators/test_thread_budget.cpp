@@ -26,8 +26,8 @@ size_t thread_count() {
 }
 
 // Assembly of the stiffness of a clamped 80 x 8 x 8 bar (30,720 tets), a direct solve of it
-// (positive definite: the undeformed state) with a made-up right-hand side (whose
-// supernodal factorisation calls BLAS on fronts large enough for OpenBLAS to use threads) and
+// (positive definite: the undeformed state) with a made-up right-hand side (the supernodal
+// factorisation, whose BLAS calls OpenBLAS would share with its pool, and the solves) and
 // products: every parallel part of a Newton iteration with the direct solver.
 double newton_work() {
   const TetMesh m = box_mesh({Vec3::Zero(), Vec3(1, 0.1, 0.1), Eigen::Vector3i(80, 8, 8)});

@@ -1,0 +1,153 @@
+#include "integrators/solvers/supernodal_cholesky.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+#include "integrators/solvers/tiled_blas.hpp"
+
+namespace depthfem {
+
+// CHOLMOD's supernodal layout (integer version): supernode s holds the columns
+// super[s] .. super[s+1]-1 of L; its row indices are s[pi[s]] .. s[pi[s+1]-1], ascending, the
+// first ones its own columns; its values are a dense column-major block of those rows by its
+// columns at x[px[s]].
+SupernodalCholesky::SupernodalCholesky(const cholmod_sparse& A, cholmod_factor& L,
+                                       cholmod_common& common) {
+  if (!L.is_super || L.itype != CHOLMOD_INT || A.stype >= 0 || A.xtype != CHOLMOD_REAL ||
+      !A.packed || A.nrow != L.n || A.ncol != L.n)
+    throw std::invalid_argument(
+        "SupernodalCholesky: needs the lower triangle of a real matrix and its supernodal "
+        "analysis (int indices)");
+  if (L.xtype == CHOLMOD_PATTERN &&
+      !cholmod_change_factor(CHOLMOD_REAL, true, true, true, true, &L, &common))
+    throw std::runtime_error("CHOLMOD: allocating the supernodal factor failed (status " +
+                             std::to_string(common.status) + ")");
+  const int n = static_cast<int>(L.n), nsuper = static_cast<int>(L.nsuper);
+  const int* super = static_cast<const int*>(L.super);
+  const int* pi = static_cast<const int*>(L.pi);
+  const int* px = static_cast<const int*>(L.px);
+  const int* rows = static_cast<const int*>(L.s);
+  const int* perm = static_cast<const int*>(L.Perm);
+
+  super_of_column_.resize(n);
+  for (int s = 0; s < nsuper; ++s)
+    std::fill(super_of_column_.begin() + super[s], super_of_column_.begin() + super[s + 1], s);
+  std::vector<int> inverse(n);
+  for (int k = 0; k < n; ++k) inverse[perm[k]] = k;
+
+  // Entry (i, j), i >= j, of A is entry (max, min) of the permuted indices in L.
+  const int* Ap = static_cast<const int*>(A.p);
+  const int* Ai = static_cast<const int*>(A.i);
+  std::vector<int> super_of_entry, source;
+  std::vector<size_t> destination;
+  for (int j = 0; j < n; ++j)
+    for (int p = Ap[j]; p < Ap[j + 1]; ++p) {
+      if (Ai[p] < j) continue;  // the upper triangle is not read (as CHOLMOD)
+      const int a = inverse[Ai[p]], b = inverse[j];
+      const int row = std::max(a, b), col = std::min(a, b);
+      const int s = super_of_column_[col];
+      const int* first = rows + pi[s];
+      const int* last = rows + pi[s + 1];
+      const int* at = std::lower_bound(first, last, row);
+      if (at == last || *at != row)
+        throw std::invalid_argument("SupernodalCholesky: an entry of A is not in L's pattern");
+      super_of_entry.push_back(s);
+      source.push_back(p);
+      destination.push_back(size_t(px[s]) + size_t(col - super[s]) * (last - first) + (at - first));
+    }
+  // Grouped by supernode (a counting sort), in the order of A within each.
+  entry_begin_.assign(nsuper + 1, 0);
+  for (const int s : super_of_entry) ++entry_begin_[s + 1];
+  for (int s = 0; s < nsuper; ++s) entry_begin_[s + 1] += entry_begin_[s];
+  entry_source_.resize(source.size());
+  entry_destination_.resize(source.size());
+  std::vector<size_t> next = entry_begin_;
+  for (size_t e = 0; e < source.size(); ++e) {
+    const size_t to = next[super_of_entry[e]]++;
+    entry_source_[to] = source[e];
+    entry_destination_[to] = destination[e];
+  }
+  head_.resize(nsuper);
+  next_.resize(nsuper);
+  position_.resize(nsuper);
+  row_map_.resize(n);
+  relative_map_.resize(n);
+}
+
+bool SupernodalCholesky::factorize(const cholmod_sparse& A, cholmod_factor& L) {
+  const int nsuper = static_cast<int>(L.nsuper);
+  const int* super = static_cast<const int*>(L.super);
+  const int* pi = static_cast<const int*>(L.pi);
+  const int* px = static_cast<const int*>(L.px);
+  const int* rows = static_cast<const int*>(L.s);
+  const double* Ax = static_cast<const double*>(A.x);
+  double* Lx = static_cast<double*>(L.x);
+
+  // head_[s]: the first supernode of the list of those that still have to update s; next_[d]
+  // the one after d; position_[d]: the first of d's rows that the next update reads.
+  std::fill(head_.begin(), head_.end(), -1);
+  for (int s = 0; s < nsuper; ++s) {
+    const int k1 = super[s], k2 = super[s + 1], ncol = k2 - k1;
+    const int* srows = rows + pi[s];
+    const int nrow = pi[s + 1] - pi[s];
+    double* Ls = Lx + px[s];
+
+    // The columns of A.
+    std::fill(Ls, Ls + size_t(nrow) * ncol, 0.0);
+    for (size_t e = entry_begin_[s]; e < entry_begin_[s + 1]; ++e)
+      Lx[entry_destination_[e]] = Ax[entry_source_[e]];
+    for (int k = 0; k < nrow; ++k) row_map_[srows[k]] = k;
+
+    // Minus L(k1:, d) L(k1:k2, d)^T for every descendant d whose columns have rows in k1:k2.
+    for (int d = head_[s], d_next; d != -1; d = d_next) {
+      d_next = next_[d];
+      const int dcol = super[d + 1] - super[d];
+      const int* drows = rows + pi[d];
+      const int drow = pi[d + 1] - pi[d];
+      const int first = position_[d];
+      int past = first;  // d's rows first .. past-1 are columns of s
+      while (past < drow && drows[past] < k2) ++past;
+      const int m = drow - first, n = past - first;  // the update is m x n
+      if (update_.size() < size_t(m) * n) update_.resize(size_t(m) * n);
+      lower_product(m, n, dcol, 1.0, Lx + px[d] + first, drow, 0.0, update_.data(), m);
+      for (int i = 0; i < m; ++i) relative_map_[i] = row_map_[drows[first + i]];
+      const auto subtract = [&](int j) {
+        double* column = Ls + size_t(relative_map_[j]) * nrow;
+        const double* u = update_.data() + size_t(j) * m;
+        for (int i = j; i < m; ++i) column[relative_map_[i]] -= u[i];
+      };
+      if (double(m) * n < 1 << 16) {  // entries: fewer are not worth a parallel loop
+        for (int j = 0; j < n; ++j) subtract(j);
+      } else {
+        tbb::parallel_for(0, n, subtract);
+      }
+      // d's next rows belong to a later supernode: d updates that one next.
+      position_[d] = past;
+      if (past < drow) {
+        const int a = super_of_column_[drows[past]];
+        next_[d] = head_[a];
+        head_[a] = d;
+      }
+    }
+
+    const int info = cholesky_lower(ncol, Ls, nrow);
+    if (info != 0) {
+      L.minor = size_t(k1 + info - 1);
+      return false;
+    }
+    solve_right_lower_transposed(nrow - ncol, ncol, Ls, nrow, Ls + ncol, nrow);
+    if (nrow > ncol) {
+      const int a = super_of_column_[srows[ncol]];
+      position_[s] = ncol;
+      next_[s] = head_[a];
+      head_[a] = s;
+    }
+  }
+  L.minor = L.n;
+  return true;
+}
+
+}  // namespace depthfem

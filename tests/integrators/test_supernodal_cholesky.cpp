@@ -1,0 +1,158 @@
+// The supernodal factorisation into a CHOLMOD factor: the factor of CHOLMOD's own
+// cholmod_factorize to rounding, the same first failing column on an indefinite matrix, and
+// bitwise the same factor on one, two and three threads.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include "integrators/solvers/supernodal_cholesky.hpp"
+#include "integrators/solvers/thread_budget.hpp"
+#include "integrators/solvers/tiled_blas.hpp"
+
+namespace depthfem {
+namespace {
+
+// CHOLMOD's workspace for one test.
+struct Common {
+  cholmod_common c;
+  Common() {
+    cholmod_start(&c);
+    c.print = 0;
+  }
+  ~Common() { cholmod_finish(&c); }
+};
+
+// The 7-point Laplacian of a q x q x q grid plus `shift` on the diagonal, its lower triangle by
+// columns (stype -1): positive definite for shift > 0. Nested dissection gives a top separator
+// of q^2 columns, a supernode large enough for the tiled kernels (q = 30: 900 columns).
+cholmod_sparse* grid_laplacian(int q, double shift, cholmod_common& c) {
+  const int n = q * q * q;
+  cholmod_sparse* A = cholmod_allocate_sparse(n, n, 4 * size_t(n), 1, 1, -1, CHOLMOD_REAL, &c);
+  int* p = static_cast<int*>(A->p);
+  int* row = static_cast<int*>(A->i);
+  double* x = static_cast<double*>(A->x);
+  int k = 0;
+  for (int j = 0; j < n; ++j) {
+    p[j] = k;
+    row[k] = j;
+    x[k++] = 6 + shift;
+    for (const int step : {1, q, q * q}) {  // the neighbours after j along x, y, z
+      const int along = (j / step) % q;
+      if (along + 1 < q) {
+        row[k] = j + step;
+        x[k++] = -1;
+      }
+    }
+  }
+  p[n] = k;
+  return A;
+}
+
+// CHOLMOD's supernodal analysis of A with nested dissection (METIS).
+cholmod_factor* analyse(cholmod_sparse* A, cholmod_common& c) {
+  c.supernodal = CHOLMOD_SUPERNODAL;
+  c.nmethods = 1;
+  c.method[0].ordering = CHOLMOD_METIS;
+  c.postorder = 1;
+  return cholmod_analyze(A, &c);
+}
+
+std::vector<double> values(const cholmod_factor& L) {
+  const double* x = static_cast<const double*>(L.x);
+  return std::vector<double>(x, x + L.xsize);
+}
+
+// The largest supernode (columns) of L.
+int widest_supernode(const cholmod_factor& L) {
+  const int* super = static_cast<const int*>(L.super);
+  int widest = 0;
+  for (size_t s = 0; s < L.nsuper; ++s) widest = std::max(widest, super[s + 1] - super[s]);
+  return widest;
+}
+
+TEST(SupernodalCholesky, EqualsCholmodsFactorToRounding) {
+  Common common;
+  cholmod_common& c = common.c;
+  cholmod_sparse* A = grid_laplacian(30, 0.01, c);
+  cholmod_factor* reference = analyse(A, c);
+  cholmod_factor* L = cholmod_copy_factor(reference, &c);
+  ASSERT_TRUE(reference && L);
+  ASSERT_GT(widest_supernode(*L), kBlasTile);  // the Cholesky recursion and the tiles are used
+  cholmod_factorize(A, reference, &c);
+  ASSERT_EQ(reference->minor, reference->n);
+  SupernodalCholesky cholesky(*A, *L, c);
+  {
+    const SerialBlas serial;
+    ASSERT_TRUE(cholesky.factorize(*A, *L));
+  }
+  EXPECT_EQ(L->minor, L->n);
+  // Entries of L are at most sqrt(6.01) in size, and each sums at most a few thousand products:
+  // its rounding stays far below 1e-11 (measured: about 1e-14).
+  const std::vector<double> ours = values(*L), theirs = values(*reference);
+  double worst = 0;
+  for (size_t k = 0; k < ours.size(); ++k) worst = std::max(worst, std::abs(ours[k] - theirs[k]));
+  EXPECT_LT(worst, 1e-11);
+  // And CHOLMOD solves with it: A x = b to rounding.
+  cholmod_dense* b = cholmod_ones(A->nrow, 1, CHOLMOD_REAL, &c);
+  cholmod_dense* x = cholmod_solve(CHOLMOD_A, L, b, &c);
+  cholmod_dense* r = cholmod_copy_dense(b, &c);
+  double minus_one[2] = {-1, 0}, one[2] = {1, 0};
+  cholmod_sdmult(A, 0, minus_one, one, x, r, &c);  // r = b - A x
+  EXPECT_LT(cholmod_norm_dense(r, 0, &c), 1e-10 * cholmod_norm_dense(b, 0, &c));
+  for (cholmod_dense* d : {b, x, r}) cholmod_free_dense(&d, &c);
+  cholmod_free_factor(&L, &c);
+  cholmod_free_factor(&reference, &c);
+  cholmod_free_sparse(&A, &c);
+}
+
+// A - 0.6 I has a few negative eigenvalues (the Laplacian's lowest are near 0.07): both
+// factorisations stop at the same first pivot that is not positive.
+TEST(SupernodalCholesky, StopsWhereCholmodStopsOnAnIndefiniteMatrix) {
+  Common common;
+  cholmod_common& c = common.c;
+  cholmod_sparse* A = grid_laplacian(20, -0.6, c);
+  cholmod_factor* reference = analyse(A, c);
+  cholmod_factor* L = cholmod_copy_factor(reference, &c);
+  cholmod_factorize(A, reference, &c);
+  ASSERT_LT(reference->minor, reference->n);
+  SupernodalCholesky cholesky(*A, *L, c);
+  const SerialBlas serial;
+  EXPECT_FALSE(cholesky.factorize(*A, *L));
+  EXPECT_EQ(L->minor, reference->minor);
+  cholmod_free_factor(&L, &c);
+  cholmod_free_factor(&reference, &c);
+  cholmod_free_sparse(&A, &c);
+}
+
+// The supernodes in CHOLMOD's order, their dense blocks in tiles cut by their sizes alone:
+// the factor does not depend on the number of threads. (CHOLMOD's own, through a threaded
+// OpenBLAS, does.)
+TEST(SupernodalCholesky, BitwiseTheSameFactorOnOneTwoAndThreeThreads) {
+  Common common;
+  cholmod_common& c = common.c;
+  cholmod_sparse* A = grid_laplacian(30, 0.01, c);
+  cholmod_factor* L = analyse(A, c);
+  SupernodalCholesky cholesky(*A, *L, c);
+  const auto factor_on = [&](int threads) {
+    const SerialBlas serial;
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    tbb::task_arena arena(threads);
+    bool ok = false;
+    arena.execute([&] { ok = cholesky.factorize(*A, *L); });
+    EXPECT_TRUE(ok);
+    return values(*L);
+  };
+  const std::vector<double> one = factor_on(1);
+  EXPECT_TRUE(factor_on(2) == one);
+  EXPECT_TRUE(factor_on(3) == one);
+  cholmod_free_factor(&L, &c);
+  cholmod_free_sparse(&A, &c);
+}
+
+}  // namespace
+}  // namespace depthfem
