@@ -11,8 +11,8 @@ namespace depthfem {
 /// how many: TBB (assembly, products, contact search, the direct solver's factorisation) runs at
 /// most that many, on work cut by its sizes alone. BLAS runs on the calling thread: a threaded
 /// BLAS cuts its work by its thread count (OpenBLAS gives other bits on two threads than on
-/// one), so the factorisation shares its dense blocks in tiles of its own (solvers/tiled_blas.hpp), and
-/// PETSc's vector operations (AMG), which OpenBLAS would share over more than 10,000 entries,
+/// one), so the factorisation shares its dense blocks in tiles of its own (solvers/tiled_blas.hpp),
+/// and PETSc's vector operations (AMG), which OpenBLAS would share over more than 10,000 entries,
 /// stay on the calling thread (no slower: bench/results/thread_scaling_16core.md). OpenBLAS's
 /// pool, started when the library is loaded, is stopped. CHOLMOD's OpenMP loops (four threads
 /// when left alone) run on the calling thread. MPI, which PETSc starts on first use, adds a helper
