@@ -79,14 +79,22 @@ for k in range(kills):
                for name, values in fields.items()):
             unequal += 1
     for sidecar in (f"run{k}.xmf", f"run{k}.xdmf2"):
+        # The results file is put in place before its sidecars are written: a run killed in
+        # between leaves no sidecar, which is correct as long as it printed no step.
         try:
             text = open(os.path.join(tmp, sidecar)).read()
+        except FileNotFoundError as e:
+            if printed:
+                sidecar_missing += 1
+                print(f"run {k}: {sidecar}: {e}")
+            continue
+        try:
             ET.fromstring(text)
-            listed = len(re.findall(r'<Grid Name="step_', text))
-        except (OSError, ET.ParseError) as e:
-            listed = -1
+        except ET.ParseError as e:
+            corrupt += 1
             print(f"run {k}: {sidecar}: {e}")
-        if listed < len(printed):
+            continue
+        if len(re.findall(r'<Grid Name="step_', text)) < len(printed):
             sidecar_missing += 1
 print(f"kills {kills}, steps printed {printed_total}, steps in the files {in_file}, "
       f"runs killed before the file existed {no_file}, corrupt files {corrupt}, "
