@@ -14,6 +14,7 @@
 #include "integrators/elements/psd_projection.hpp"
 #include "integrators/elements/tet_inputs.hpp"
 #include "integrators/elements/tet_kernel.hpp"
+#include "materials/isochoric.hpp"
 
 namespace depthfem {
 
@@ -144,7 +145,8 @@ Elasticity::Elasticity(const Points& X, const TetIndices& tets, std::vector<Elas
                          ", outside 0.." + std::to_string(tets.rows() - 1));
       }
     }
-    groups_.push_back({in.material, make_tet_block(X, tets, in.tets, in.fibers), {}});
+    groups_.push_back(
+        {in.material, in.formulation, make_tet_block(X, tets, in.tets, in.fibers), {}});
   }
 }
 
@@ -172,13 +174,17 @@ double Elasticity::evaluate(const Points& x, VectorX* gradient, BlockSparseMatri
   for (const Group& grp : groups_) {
     if (hessian && grp.scatter.empty())
       throw std::logic_error("elasticity: bind() the Hessian first");
+    const auto run = [&](const auto& m) {
+      if (hessian)
+        return run_group<2>(m, grp.block, grp.scatter.data(), x, gradient, hessian,
+                            options_.project_hessian);
+      if (gradient) return run_group<1>(m, grp.block, nullptr, x, gradient, nullptr, false);
+      return run_group<0>(m, grp.block, nullptr, x, nullptr, nullptr, false);
+    };
     total += std::visit(
-        [&](const auto& m) {
-          if (hessian)
-            return run_group<2>(m, grp.block, grp.scatter.data(), x, gradient, hessian,
-                                options_.project_hessian);
-          if (gradient) return run_group<1>(m, grp.block, nullptr, x, gradient, nullptr, false);
-          return run_group<0>(m, grp.block, nullptr, x, nullptr, nullptr, false);
+        [&]<class M>(const M& m) {
+          if (grp.formulation == VolumeFormulation::kNodalPressure) return run(Isochoric<M>{m});
+          return run(m);
         },
         grp.material);
   }

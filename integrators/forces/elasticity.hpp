@@ -9,11 +9,20 @@
 
 namespace depthfem {
 
+/// How a group's tets take the volume change.
+enum class VolumeFormulation {
+  kStandard,  ///< psi(F) of each tet, the material as given (locks as nu -> 0.5)
+  /// psi(J^-1/3 F) of each tet (materials/isochoric.hpp); the volume change is averaged over the
+  /// nodes by a NodalVolume module (nodal_volume.hpp), which the owner adds for these tets
+  kNodalPressure,
+};
+
 /// Tets sharing one material model; `fibers` has a direction per tet when the model needs one.
 struct ElasticGroup {
   MaterialModel material;
   std::vector<Index> tets;  ///< global tet ids
   Points fibers;            ///< #tets x 3 or empty
+  VolumeFormulation formulation = VolumeFormulation::kStandard;
 };
 
 /// Options of the elastic force module.
@@ -51,6 +60,7 @@ class Elasticity final : public ForceModule {
  private:
   struct Group {
     MaterialModel material;
+    VolumeFormulation formulation;
     TetBlock block;
     std::vector<Index> scatter;  ///< 16 block indices per row: (a, b) at 16 e + 4 a + b
   };
