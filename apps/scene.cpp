@@ -140,8 +140,14 @@ LoadedMesh make_mesh(const MeshSpec& spec, const JsonObject& m) {
 }
 
 // Material parameters by model name; the keys are those of the model's struct.
-MaterialModel read_material(JsonObject m, Vec3& fiber_direction) {
+MaterialModel read_material(JsonObject m, Vec3& fiber_direction, VolumeFormulation& formulation) {
   const std::string model = m.string("model");
+  // Every model has an isochoric part (materials/isochoric.hpp) and a small-strain bulk
+  // modulus, so every model takes either formulation.
+  formulation =
+      m.choice<VolumeFormulation>("formulation", "formulation",
+                                  {{"standard", VolumeFormulation::kStandard},
+                                   {"nodal_pressure", VolumeFormulation::kNodalPressure}});
   MaterialModel out;
   // Young's modulus and Poisson's ratio are converted by the model; range errors are reported
   // at the key they concern.
@@ -201,6 +207,7 @@ struct BodyMaterial {
   std::string region;
   MaterialModel model;
   Vec3 fiber = Vec3::UnitX();
+  VolumeFormulation formulation = VolumeFormulation::kStandard;
   std::string path;  // the scene key, for messages
 };
 
@@ -211,7 +218,7 @@ std::vector<BodyMaterial> read_body_materials(JsonObject& b) {
   if (!b.has("materials")) {
     const JsonObject m = b.object("material");
     BodyMaterial& one = out.emplace_back();
-    one.model = read_material(m, one.fiber);
+    one.model = read_material(m, one.fiber, one.formulation);
     one.path = m.path();
     return out;
   }
@@ -221,7 +228,7 @@ std::vector<BodyMaterial> read_body_materials(JsonObject& b) {
     const JsonObject m = ms.object(region);
     BodyMaterial& one = out.emplace_back();
     one.region = region;
-    one.model = read_material(m, one.fiber);
+    one.model = read_material(m, one.fiber, one.formulation);
     one.path = m.path();
   }
   if (out.empty()) b.fail("materials", "names no region");
@@ -783,7 +790,8 @@ void add_body(const BodySpec& b, Scene& scene, std::vector<std::string>& materia
         const auto it = std::ranges::find(body.regions, m.region, &Region::name);
         tets = it != body.regions.end() ? *it : Region{};
       }
-      ElasticGroup g{.material = m.model, .tets = {}, .fibers = Points()};
+      ElasticGroup g{
+          .material = m.model, .tets = {}, .fibers = Points(), .formulation = m.formulation};
       for (Index t = 0; t < tets.num_tets; ++t) g.tets.push_back(tets.first_tet + t);
       if (material_uses_fiber(g.material))
         g.fibers = m.fiber.transpose().replicate(static_cast<Index>(g.tets.size()), 1);

@@ -183,6 +183,23 @@ TEST_F(SceneFileTest, MooneyRivlinTakesYoungsModulusAndPoissonsRatio) {
             std::string::npos);
 }
 
+TEST_F(SceneFileTest, FormulationChoosesHowTetsTakeTheVolumeChange) {
+  const std::string nh =
+      R"({"model": "neo_hookean", "youngs": 3e4, "poisson": 0.4999, "formulation": "nodal_pressure"})";
+  const Scene s = load_scene(write(kValid), {parse_override("bodies.0.material=" + nh)});
+  EXPECT_EQ(s.groups.at(0).formulation, VolumeFormulation::kNodalPressure);
+  EXPECT_EQ(load_scene(write(kValid)).groups.at(0).formulation, VolumeFormulation::kStandard);
+  EXPECT_NE(error(kValid, {parse_override("bodies.0.material.formulation=mixed")})
+                .find("bodies[0].material.formulation: unknown formulation 'mixed' (expected "
+                      "standard or nodal_pressure)"),
+            std::string::npos);
+  EXPECT_NE(error(kValid, {parse_override(R"(bodies.0.material={"model": "neo_hookean",
+                                             "youngs": 3e4, "poisson": 0.5,
+                                             "formulation": "nodal_pressure"})")})
+                .find("bodies[0].material.poisson: Poisson's ratio must be in (-1, 0.5)"),
+            std::string::npos);
+}
+
 TEST_F(SceneFileTest, OverridesReachNestedKeys) {
   const Scene s = load_scene(write(kValid), {parse_override("bodies.0.mesh.cells=[2,1,1]"),
                                              parse_override("solver.linear_solver=gmres")});
