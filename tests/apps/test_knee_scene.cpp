@@ -82,6 +82,23 @@ TEST(KneeScene, VerondaVariantHasTheMooneyRivlinSmallStrainModuli) {
   EXPECT_EQ(veronda.mesh.num_tets(), mr.mesh.num_tets());
 }
 
+// The nearly incompressible variant: the soft tissue on the nodal-pressure formulation with the
+// same shear modulus and Poisson's ratio 0.49; the patella and everything else as in the scene.
+TEST(KneeScene, IncompressibleVariantTakesNodalPressureAtPoisson049) {
+  const Scene mr = load("knee_flexion"), inc = load("knee_flexion_incompressible");
+  ASSERT_EQ(inc.groups.size(), mr.groups.size());
+  EXPECT_EQ(inc.groups[0].formulation, VolumeFormulation::kNodalPressure);
+  EXPECT_EQ(inc.groups[1].formulation, VolumeFormulation::kStandard);
+  const LinearizedModuli a = material_moduli(mr.groups[0].material);
+  const LinearizedModuli b = material_moduli(inc.groups[0].material);
+  EXPECT_NEAR(b.mu, a.mu, 1e-6);
+  EXPECT_NEAR(b.poisson(), 0.49, 1e-9);
+  EXPECT_EQ(inc.mesh.num_tets(), mr.mesh.num_tets());
+  ASSERT_EQ(inc.constraints.size(), mr.constraints.size());
+  for (size_t k = 0; k < inc.constraints.size(); ++k)
+    EXPECT_EQ(inc.constraints[k].name, mr.constraints[k].name);
+}
+
 // Three steps of 0.5 degrees: about as long as one of the full run's first 3 degree steps, with
 // more chances to catch a step that fails.
 TEST(KneeScene, FirstStepsConvergeWithoutInversionOrDeepPenetration) {
