@@ -261,8 +261,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
       ElementFields elements;
       if (fields.stress || fields.strain) {
         PhaseTimers::Scope t(result.timers, "output: element fields");
-        elements =
-            element_fields(mesh.X, mesh.tets, scene.groups, x, {fields.stress, fields.strain});
+        const VectorX pressure =
+            model->nodal_volume ? model->nodal_volume->nodal_pressures(x) : VectorX();
+        elements = element_fields(mesh.X, mesh.tets, scene.groups, x,
+                                  {fields.stress, fields.strain}, &pressure);
       }
       PhaseTimers::Scope t(result.timers, "output: results file");
       file->append_step(step, x, v, &elements);

@@ -7,7 +7,6 @@
 #include "core/mass.hpp"
 #include "integrators/forces/consistent_mass.hpp"
 #include "integrators/forces/gravity.hpp"
-#include "integrators/forces/nodal_volume.hpp"
 #include "integrators/forces/stiffness_tether.hpp"
 
 namespace depthfem {
@@ -29,7 +28,7 @@ std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers)
       &system.add(std::make_unique<Elasticity>(mesh.X, mesh.tets, scene.groups, scene.elasticity));
   // Groups with the nodal-pressure formulation: their volume change averaged over the nodes.
   if (auto volume = make_nodal_volume(mesh.X, mesh.tets, scene.groups))
-    system.add(std::move(volume));
+    model->nodal_volume = &system.add(std::move(volume));
   model->lumped_mass = lumped_mass(mesh.X, mesh.tets, scene.tet_density);
   const VectorX& mass = model->lumped_mass;
   const bool time_dependent = scene.analysis != Analysis::kStatic;

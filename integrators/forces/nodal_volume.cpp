@@ -195,6 +195,14 @@ VectorX NodalVolume::nodal_volume_ratios(const Points& x) const {
   return J;
 }
 
+VectorX NodalVolume::nodal_pressures(const Points& x) const {
+  const VectorX J = nodal_volume_ratios(x);
+  VectorX p = VectorX::Zero(x.rows());
+  for (size_t a = 0; a < node_.size(); ++a)
+    p[node_[a]] = bulk_[a] * VolumetricPenalty::first(J[a]) / rest_volume_[a];
+  return p;
+}
+
 double NodalVolume::evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const {
   if (hessian && !gradient) throw std::logic_error("nodal volume: a Hessian needs a gradient too");
   const Index nn = static_cast<Index>(node_.size()), nt = static_cast<Index>(tet_.rows());

@@ -54,6 +54,9 @@ class NodalVolume final : public ForceModule {
 
   /// J_a = v_a / V_a of every node the tets touch (in increasing global node order) at x.
   VectorX nodal_volume_ratios(const Points& x) const;
+  /// The nodal pressure pi_a = K_a U~'(J_a) / V_a [Pa] (the Cauchy pressure of the volumetric
+  /// energy, positive in tension) at x, per global node (#nodes of x; zero at nodes of no tet).
+  VectorX nodal_pressures(const Points& x) const;
   /// Global ids of the nodes the tets touch, increasing (the order of nodal_volume_ratios).
   const std::vector<Index>& nodes() const { return node_; }
 

@@ -14,6 +14,7 @@
 #include "integrators/elements/psd_projection.hpp"
 #include "integrators/elements/tet_kernel.hpp"
 #include "integrators/forces/elasticity.hpp"
+#include "integrators/module_assembly.hpp"
 #include "materials/all_models.hpp"
 #include "materials/lanes.hpp"
 
@@ -27,31 +28,9 @@ ElasticGroup whole_mesh(const TetMesh& m, const MaterialModel& model, const Vec3
   return g;
 }
 
-struct Assembled {
-  double energy;
-  VectorX gradient;
-  BlockSparseMatrix hessian;
-};
-
-Assembled assemble(Elasticity& e, const Points& x) {
-  SparsityBuilder builder(static_cast<Index>(x.rows()));
-  e.add_couplings(builder);
-  Assembled a{0, VectorX::Zero(3 * x.rows()), BlockSparseMatrix(builder)};
-  e.bind(a.hessian);
-  a.energy = e.evaluate(x, &a.gradient, &a.hessian);
-  return a;
-}
-
-// Positions X moved by a random affine map and random nodal noise of `noise` x (cell size).
-Points perturbed(const Points& X, double noise, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1, 1);
-  Mat3 A = Mat3::Identity();
-  for (int k = 0; k < 9; ++k) A(k) += 0.2 * u(rng);
-  Points x = X * A.transpose();
-  for (Index i = 0; i < x.size(); ++i) x(i) += noise * u(rng);
-  return x;
-}
+using testing::assemble;
+using testing::Assembled;
+using testing::perturbed;
 
 // Patch test: under x = A X + b every tet has F = A, so the energy is psi(A) V exactly, and
 // interior nodes are in equilibrium (their element forces cancel by the divergence theorem).
@@ -127,18 +106,8 @@ TEST(Elasticity, SameResultsOnOneAndTwoThreads) {
       b{Veronda{1.5e3, 0.8, 2e4}, {}, Points()};
   for (Index t = 0; t < m.tets.rows(); ++t) (t % 2 ? a : b).tets.push_back(t);
   Elasticity e(m.X, m.tets, {a, b});
-  auto run = [&](int threads) {
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-    return assemble(e, x);
-  };
-  const Assembled one = run(1), two = run(2);
   // Deterministic by construction (coloring + fixed chunking): identical, not merely close.
-  EXPECT_EQ(one.energy, two.energy);
-  EXPECT_EQ((one.gradient - two.gradient).cwiseAbs().maxCoeff(), 0.0);
-  EXPECT_EQ(
-      (one.hessian.to_sparse().coeffs() - two.hessian.to_sparse().coeffs()).cwiseAbs().maxCoeff(),
-      0.0);
-  EXPECT_NEAR(one.energy, two.energy, 1e-12 * std::abs(one.energy));  // the requirement
+  testing::expect_same_bits_on_one_and_two_threads([&] { return assemble(e, x); });
 }
 
 // The first n tets of m one by one through tet_local (each Hessian through project_to_psd when

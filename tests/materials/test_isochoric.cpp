@@ -8,26 +8,12 @@
 #include "finite_differences.hpp"
 #include "materials/all_models.hpp"
 #include "materials/isochoric.hpp"
+#include "materials/random_state.hpp"
 
 namespace depthfem {
 namespace {
 
-// Random F = I + 0.35 noise with det F >= 0.3, and a random unit fiber direction.
-struct RandomState {
-  std::mt19937 rng{2024};
-  Mat3 F() {
-    std::uniform_real_distribution<double> u(-1, 1);
-    for (;;) {
-      Mat3 F = Mat3::Identity();
-      for (int i = 0; i < 9; ++i) F(i) += 0.35 * u(rng);
-      if (F.determinant() >= 0.3) return F;
-    }
-  }
-  Vec3 fiber() {
-    std::normal_distribution<double> n;
-    return Vec3(n(rng), n(rng), n(rng)).normalized();
-  }
-};
+using testing::RandomState;
 
 // Runs check(Isochoric<M>{m}, name) for every model of all_models().
 template <class Check>
