@@ -66,7 +66,9 @@ struct NewtonResult {
 class NewtonSolver {
  public:
   NewtonSolver(System& system, const Constraints& constraints, NewtonOptions options)
-      : system_(system), constraints_(constraints), options_(options), linear_(options.linear) {}
+      : system_(system), constraints_(constraints), options_(options), linear_(options.linear) {
+    linear_.set_decoupled_nodes(constraints.fully_constrained_nodes());
+  }
 
   /// Solves in place from x, whose constrained components must already hold their targets.
   NewtonResult solve(Points& x);
