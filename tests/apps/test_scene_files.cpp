@@ -130,7 +130,7 @@ TEST_F(SceneFileTest, TimeIntegrationSettingsAreChecked) {
   };
   EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "rk4", "time_step": 1, "duration": 1})"))
                 .find("dynamic.integrator: unknown integrator 'rk4' (expected implicit_euler, "
-                      "newmark, symplectic_euler or arkode)"),
+                      "newmark, generalized_alpha, symplectic_euler, arkode or arkode_dirk)"),
             std::string::npos);
   EXPECT_NE(error(kValid, set("quasistatic", R"({"time_step": 1, "duration": 1})"))
                 .find("dynamic.viscosity: missing"),
@@ -169,6 +169,25 @@ TEST_F(SceneFileTest, TimeIntegrationSettingsAreChecked) {
                                              "mass": "consistent"})"))
                 .find("dynamic.mass: a consistent mass matrix needs an implicit integrator"),
             std::string::npos);
+  EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "generalized_alpha", "time_step": 1,
+                                             "duration": 1, "generalized_alpha": {"rho_inf": 2}})"))
+                .find("dynamic.generalized_alpha.rho_inf: must be in [0, 1]"),
+            std::string::npos);
+  EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "newmark", "time_step": 1,
+                                             "duration": 1, "generalized_alpha": {}})"))
+                .find("dynamic.generalized_alpha: only for \"integrator\": \"generalized_alpha\""),
+            std::string::npos);
+  EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "arkode_dirk", "time_step": 1,
+                                             "duration": 1, "arkode": {"order": 8}})"))
+                .find("dynamic.arkode.order: must be 2, 3, 4 or 5 for arkode_dirk"),
+            std::string::npos);
+  EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "arkode_dirk", "time_step": 1,
+                                             "duration": 1, "mass": "consistent"})"))
+                .find("dynamic.mass: arkode_dirk takes the lumped mass matrix"),
+            std::string::npos);
+  EXPECT_NE(
+      error(kValid, {parse_override(R"(output={"every": 0})")}).find("output.every: must be >= 1"),
+      std::string::npos);
 }
 
 TEST_F(SceneFileTest, MooneyRivlinTakesYoungsModulusAndPoissonsRatio) {
