@@ -1,7 +1,8 @@
 #pragma once
 /// Options and step records shared by the time integrators (paper section 4 and the explicit
-/// comparators): implicit Euler and Newmark (implicit_stepper.hpp), symplectic Euler
-/// (symplectic_euler.hpp) and SUNDIALS ARKODE ERKStep (arkode_stepper.hpp).
+/// comparators): implicit Euler, Newmark and generalized-alpha (implicit_stepper.hpp), symplectic
+/// Euler (symplectic_euler.hpp) and SUNDIALS ARKODE, ERKStep and ARKStep's diagonally implicit
+/// methods (arkode_stepper.hpp).
 
 #include "integrators/solvers/newton.hpp"
 
@@ -34,9 +35,9 @@ constexpr bool has_erk_table(int order) {
   return order >= 2 && order <= 8 && order != 7;
 }
 
-/// ERKStep settings (integrator kArkode).
+/// ARKODE settings (integrators kArkode and kArkodeDirk).
 struct ArkodeOptions {
-  int order = 4;  ///< one with has_erk_table(order)
+  int order = 4;  ///< kArkode: has_erk_table(order); kArkodeDirk: has_dirk_table(order)
   double relative_tolerance = 1e-6;
   double absolute_tolerance = 1e-9;  ///< [m] on positions, [m/s] on velocities
   long max_steps = 100000;           ///< internal steps per output interval

@@ -75,10 +75,10 @@ void ImplicitStepper::run(Points& x, Points& v) {
     // The inertia and damping tethers with these scales and anchors make the balance
     // M a^{n+1-alpha_m} + C v^{n+1-alpha_f} + grad E(x_af) = 0 the stationarity of the step's
     // potential (Newmark: alpha_m = alpha_f = 0).
-    Points predicted, damping_anchor;
+    Points newmark, predicted, damping_anchor;
     double inertia_scale, damping_scale;
     if (second_order) {
-      const Points newmark = x + h * v + ((0.5 - beta) * h * h) * a;
+      newmark = x + h * v + ((0.5 - beta) * h * h) * a;
       inertia_scale = (1 - am) / (beta * h * h * (1 - af));
       damping_scale = gamma / (beta * h);
       const Points mid = af * x + (1 - af) * newmark;
@@ -115,7 +115,7 @@ void ImplicitStepper::run(Points& x, Points& v) {
       lifecycle_.set_load(t_next / options_.duration);
     }
     if (second_order) {
-      const Points a_next = (next - (x + h * v + ((0.5 - beta) * h * h) * a)) / (beta * h * h);
+      const Points a_next = (next - newmark) / (beta * h * h);
       v += h * ((1 - gamma) * a + gamma * a_next);
       a = a_next;
     } else {

@@ -169,22 +169,21 @@ TEST_F(SceneFileTest, TimeIntegrationSettingsAreChecked) {
                                              "mass": "consistent"})"))
                 .find("dynamic.mass: a consistent mass matrix needs an implicit integrator"),
             std::string::npos);
-  EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "generalized_alpha", "time_step": 1,
-                                             "duration": 1, "generalized_alpha": {"rho_inf": 2}})"))
-                .find("dynamic.generalized_alpha.rho_inf: must be in [0, 1]"),
-            std::string::npos);
-  EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "newmark", "time_step": 1,
-                                             "duration": 1, "generalized_alpha": {}})"))
-                .find("dynamic.generalized_alpha: only for \"integrator\": \"generalized_alpha\""),
-            std::string::npos);
-  EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "arkode_dirk", "time_step": 1,
-                                             "duration": 1, "arkode": {"order": 8}})"))
-                .find("dynamic.arkode.order: must be 2, 3, 4 or 5 for arkode_dirk"),
-            std::string::npos);
-  EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "arkode_dirk", "time_step": 1,
-                                             "duration": 1, "mass": "consistent"})"))
-                .find("dynamic.mass: arkode_dirk takes the lumped mass matrix"),
-            std::string::npos);
+  // The new integrators' settings: each "dynamic" section (time_step and duration 1) and the
+  // message that locates its error.
+  const std::pair<const char*, const char*> integrator_errors[] = {
+      {R"("integrator": "generalized_alpha", "generalized_alpha": {"rho_inf": 2})",
+       "dynamic.generalized_alpha.rho_inf: must be in [0, 1]"},
+      {R"("integrator": "newmark", "generalized_alpha": {})",
+       "dynamic.generalized_alpha: only for \"integrator\": \"generalized_alpha\""},
+      {R"("integrator": "arkode_dirk", "arkode": {"order": 8})",
+       "dynamic.arkode.order: must be 2, 3, 4 or 5 for arkode_dirk"},
+      {R"("integrator": "arkode_dirk", "mass": "consistent")",
+       "dynamic.mass: arkode_dirk takes the lumped mass matrix"}};
+  for (const auto& [section, message] : integrator_errors) {
+    const std::string d = std::string(R"({"time_step": 1, "duration": 1, )") + section + "}";
+    EXPECT_NE(error(kValid, set("dynamic", d)).find(message), std::string::npos) << section;
+  }
   EXPECT_NE(
       error(kValid, {parse_override(R"(output={"every": 0})")}).find("output.every: must be >= 1"),
       std::string::npos);
