@@ -428,8 +428,10 @@ void read_dynamic(JsonObject d, Scene& scene) {
   o.integrator = d.choice<Integrator>("integrator", "integrator",
                                       {{"implicit_euler", Integrator::kImplicitEuler},
                                        {"newmark", Integrator::kNewmark},
+                                       {"generalized_alpha", Integrator::kGeneralizedAlpha},
                                        {"symplectic_euler", Integrator::kSymplecticEuler},
-                                       {"arkode", Integrator::kArkode}});
+                                       {"arkode", Integrator::kArkode},
+                                       {"arkode_dirk", Integrator::kArkodeDirk}});
   o.time_step = d.number("time_step");
   o.duration = d.number("duration");
   if (!(o.time_step > 0)) d.fail("time_step", "must be > 0");
@@ -454,6 +456,8 @@ void read_dynamic(JsonObject d, Scene& scene) {
       {{"lumped", MassMatrix::kLumped}, {"consistent", MassMatrix::kConsistent}});
   if (o.mass == MassMatrix::kConsistent && explicit_scheme)
     d.fail("mass", "a consistent mass matrix needs an implicit integrator");
+  if (o.mass == MassMatrix::kConsistent && o.integrator == Integrator::kArkodeDirk)
+    d.fail("mass", "arkode_dirk takes the lumped mass matrix");
   if (std::optional<JsonObject> section =
           integrator_section(d, "newmark", o.integrator == Integrator::kNewmark)) {
     JsonObject& n = *section;
@@ -462,6 +466,14 @@ void read_dynamic(JsonObject d, Scene& scene) {
     if (!(o.newmark.beta > 0 && o.newmark.beta <= 0.5)) n.fail("beta", "must be in (0, 0.5]");
     if (!(o.newmark.gamma >= 0.5 && o.newmark.gamma <= 1)) n.fail("gamma", "must be in [0.5, 1]");
     n.finish();
+  }
+  if (std::optional<JsonObject> section = integrator_section(
+          d, "generalized_alpha", o.integrator == Integrator::kGeneralizedAlpha)) {
+    JsonObject& g = *section;
+    o.generalized_alpha.rho_inf = g.number("rho_inf", o.generalized_alpha.rho_inf);
+    if (!(o.generalized_alpha.rho_inf >= 0 && o.generalized_alpha.rho_inf <= 1))
+      g.fail("rho_inf", "must be in [0, 1]");
+    g.finish();
   }
   if (d.has("damping")) {
     JsonObject c = d.object("damping");
@@ -473,14 +485,19 @@ void read_dynamic(JsonObject d, Scene& scene) {
       c.fail("stiffness", "needs an implicit integrator");
     c.finish();
   }
-  if (std::optional<JsonObject> section =
-          integrator_section(d, "arkode", o.integrator == Integrator::kArkode)) {
+  if (std::optional<JsonObject> section = integrator_section(
+          d, "arkode",
+          o.integrator == Integrator::kArkode || o.integrator == Integrator::kArkodeDirk)) {
     JsonObject& a = *section;
     o.arkode.order = a.integer("order", o.arkode.order);
     o.arkode.relative_tolerance = a.number("relative_tolerance", o.arkode.relative_tolerance);
     o.arkode.absolute_tolerance = a.number("absolute_tolerance", o.arkode.absolute_tolerance);
     o.arkode.max_steps = a.integer("max_steps", static_cast<int>(o.arkode.max_steps));
-    if (!has_erk_table(o.arkode.order)) a.fail("order", "must be 2, 3, 4, 5, 6 or 8");
+    o.arkode.fixed_step = a.boolean("fixed_step", o.arkode.fixed_step);
+    if (o.integrator == Integrator::kArkode && !has_erk_table(o.arkode.order))
+      a.fail("order", "must be 2, 3, 4, 5, 6 or 8");
+    if (o.integrator == Integrator::kArkodeDirk && !has_dirk_table(o.arkode.order))
+      a.fail("order", "must be 2, 3, 4 or 5 for arkode_dirk");
     if (!(o.arkode.relative_tolerance > 0)) a.fail("relative_tolerance", "must be > 0");
     if (!(o.arkode.absolute_tolerance > 0)) a.fail("absolute_tolerance", "must be > 0");
     if (!(o.arkode.max_steps > 0)) a.fail("max_steps", "must be > 0");
@@ -729,6 +746,8 @@ std::vector<ConstraintSpec> read_sections(JsonObject& r, Scene& scene) {
     scene.output.stress = o.boolean("stress", false);
     scene.output.strain = o.boolean("strain", false);
     scene.output.contact = o.boolean("contact", true);
+    scene.output_every = o.integer("every", 1);
+    if (scene.output_every < 1) o.fail("every", "must be >= 1");
     o.finish();
   }
   if (r.has("dynamic")) {

@@ -220,6 +220,8 @@ std::vector<StepValue> step_values(const StepRecord& step, bool velocity,
                              {"settling", {double(step.settling)}},
                              {"newton_iterations", {double(step.newton_iterations)}},
                              {"linear_iterations", {double(step.linear_iterations)}},
+                             {"linear_solves", {double(step.linear_solves)}},
+                             {"factorizations", {double(step.factorizations)}},
                              {"residual", {step.residuals.empty() ? 0.0 : step.residuals.back()}},
                              {"energy", {step.energy}}};
   if (velocity) out.push_back({"kinetic_energy", {step.kinetic_energy}});
@@ -364,6 +366,8 @@ struct ResultsFile::State {
                                  {"settling", i32, {}},
                                  {"newton_iterations", i32, {}},
                                  {"linear_iterations", i32, {}},
+                                 {"linear_solves", i32, {}},
+                                 {"factorizations", i32, {}},
                                  {"energy", f64, {}},
                                  {"seconds", f64, {}},
                                  {"residual_count", i32, {}},
@@ -659,6 +663,8 @@ hsize_t ResultsFile::State::write_rows(const StepRecord& step, const Points& x, 
   f.write_row("/steps/settling", k, std::int32_t(step.settling));
   f.write_row("/steps/newton_iterations", k, std::int32_t(step.newton_iterations));
   f.write_row("/steps/linear_iterations", k, std::int32_t(step.linear_iterations));
+  f.write_row("/steps/linear_solves", k, std::int32_t(step.linear_solves));
+  f.write_row("/steps/factorizations", k, std::int32_t(step.factorizations));
   f.write_row("/steps/energy", k, step.energy);
   f.write_row("/steps/seconds", k, step.seconds);
   f.write_row("/steps/residual_count", k, std::int32_t(step.residuals.size()));

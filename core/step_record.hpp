@@ -62,6 +62,8 @@ struct StepRecord {
   bool settling = false;          ///< a quasi-viscous step at full load (static)
   int newton_iterations = 0;      ///< implicit: Newton steps; ARKODE: internal Runge-Kutta steps
   int linear_iterations = 0;      ///< summed over the Newton steps
+  int linear_solves = 0;          ///< linear systems solved (one per Newton step)
+  int factorizations = 0;         ///< of those, solved by a new LL^T factorisation
   std::vector<double> residuals;  ///< |P grad E| [N] at every Newton iterate, the first included
   double energy = 0;              ///< potential energy [J]: every force module but inertia/damping
   double kinetic_energy = 0;      ///< 1/2 v^T M v [J] (time-dependent analyses; 0 otherwise)

@@ -229,6 +229,25 @@ def cases(exe):
                             "duration": duration}
         add("sizes and counts", f"dynamic duration {duration} step {step}",
             {"scene.json": scene(dynamic)})
+    for name, section in [
+            ("generalized_alpha rho_inf 1.5",
+             {"integrator": "generalized_alpha", "generalized_alpha": {"rho_inf": 1.5}}),
+            ("generalized_alpha rho_inf -0.1",
+             {"integrator": "generalized_alpha", "generalized_alpha": {"rho_inf": -0.1}}),
+            ("generalized_alpha section with newmark",
+             {"integrator": "newmark", "generalized_alpha": {"rho_inf": 0.5}}),
+            ("arkode_dirk order 6", {"integrator": "arkode_dirk", "arkode": {"order": 6}}),
+            ("arkode_dirk consistent mass", {"integrator": "arkode_dirk", "mass": "consistent"}),
+            ("arkode fixed_step as a number", {"integrator": "arkode_dirk",
+                                               "arkode": {"fixed_step": 1}})]:
+        def dynamic(s, section=section):
+            s["analysis"] = "dynamic"
+            s["dynamic"] = {"time_step": 0.01, "duration": 0.02, **section}
+        add("sizes and counts", f"dynamic {name}", {"scene.json": scene(dynamic)})
+    for every in [0, -3, 2**32 + 1, 1.5]:
+        def output(s, every=every):
+            s["output"] = {"every": every}
+        add("sizes and counts", f"output.every {every}", {"scene.json": scene(output)})
 
     # Materials and numbers that make the arithmetic non-finite.
     material = ["bodies", 0, "material"]

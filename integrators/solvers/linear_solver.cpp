@@ -166,10 +166,10 @@ LinearSolveStats LinearSolver::direct(const BlockSparseMatrix& A, const VectorX&
   }
   const DirectSolveStats d = direct_->solve(A, b, x, tolerance);
   const int iterations = (d.factored ? 1 : 0) + d.cg_iterations;
-  if (!d.success) return {iterations, 1.0, false, d.shift};
+  if (!d.success) return {iterations, 1.0, false, d.shift, d.factored};
   VectorX Ax;
   A.multiply(x, Ax);
-  return {iterations, (b - Ax).norm() / b.norm(), true, d.shift};
+  return {iterations, (b - Ax).norm() / b.norm(), true, d.shift, d.factored};
 }
 
 // CG needs a positive definite matrix; one it fails on (indefinite: deep contact, past a

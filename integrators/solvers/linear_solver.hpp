@@ -44,6 +44,7 @@ struct LinearSolveStats {
   double relative_residual = 0;    ///< |b - A x| / |b|
   bool reached_tolerance = false;  ///< iterative: tolerance met; direct: factorisation succeeded
   double shift = 0;                ///< direct: s of the factored A + s diag|A| (A indefinite)
+  bool factored = false;           ///< direct: A was factored anew (not CG on a kept factor)
 };
 
 /// Solves A x = b with the chosen method (see DirectSolver and AmgSolver). kAuto decides on the

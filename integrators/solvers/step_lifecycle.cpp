@@ -24,6 +24,8 @@ void StepLifecycle::complete(double load, const NewtonResult& newton, const Poin
   step.settling = settling;
   step.newton_iterations = newton.iterations;
   step.linear_iterations = newton.linear_iterations;
+  step.linear_solves = newton.linear_solves;
+  step.factorizations = newton.factorizations;
   step.residuals = newton.residuals;
   last_energy_ = gradient(x, last_gradient_);
   step.energy = last_energy_;

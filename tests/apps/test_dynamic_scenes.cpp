@@ -23,9 +23,11 @@ using testing::run;
 // With gravity only, every node moves alike and elastic forces vanish. Implicit Euler and
 // symplectic Euler (velocity first) both give v_n = v_0 + n h g and
 // x_n = x_0 + n h v_0 + h^2 g n (n + 1) / 2 exactly; Newmark (exact for constant acceleration,
-// whatever beta and gamma) and ARKODE's Runge-Kutta (exact for quadratic solutions) give
-// x_0 + t v_0 + g t^2 / 2. With the consistent mass matrix, whose rows sum to the lumped masses
-// that carry gravity, the uniform acceleration g still balances the weight exactly.
+// whatever beta and gamma), generalized-alpha (its balance (1 - alpha_m) a^{n+1} + alpha_m a^n = g
+// keeps a = g) and ARKODE's explicit and diagonally implicit Runge-Kutta (order >= 2: exact for
+// quadratic solutions) give x_0 + t v_0 + g t^2 / 2. With the consistent mass matrix, whose rows
+// sum to the lumped masses that carry gravity, the uniform acceleration g still balances the weight
+// exactly.
 TEST(DynamicScenes, FreeFallFollowsTheDiscreteSolutionOfEachIntegrator) {
   const std::string path = testing::temp_path("free_fall.json");
   std::ofstream(path) << R"({
@@ -45,6 +47,10 @@ TEST(DynamicScenes, FreeFallFollowsTheDiscreteSolutionOfEachIntegrator) {
       {R"("integrator": "symplectic_euler")", first_order},
       {R"("integrator": "newmark")", exact},
       {R"("integrator": "arkode")", exact},
+      {R"("integrator": "generalized_alpha")", exact},
+      {R"("integrator": "generalized_alpha", "generalized_alpha": {"rho_inf": 0})", exact},
+      {R"("integrator": "arkode_dirk", "arkode": {"order": 2})", exact},
+      {R"("integrator": "arkode_dirk", "arkode": {"order": 4})", exact},
       {R"("integrator": "newmark", "newmark": {"beta": 0.3, "gamma": 0.6})", exact},
       {R"("integrator": "newmark", "mass": "consistent")", exact},
       {R"("integrator": "implicit_euler", "mass": "consistent")", first_order}};
@@ -74,7 +80,8 @@ TEST(DynamicScenes, EveryIntegratorHonoursDirichletConditionsExactly) {
                   "nodes": {"plane": {"normal": [1, 0, 0], "offset": 0}}}],
     "dynamic": {"time_step": 0.0002, "duration": 0.002}
   })";
-  for (const char* integrator : {"implicit_euler", "newmark", "symplectic_euler", "arkode"}) {
+  for (const char* integrator : {"implicit_euler", "newmark", "generalized_alpha",
+                                 "symplectic_euler", "arkode", "arkode_dirk"}) {
     const Scene s =
         load_scene(path, {parse_override(std::string("dynamic.integrator=") + integrator)});
     const std::vector<Index>& face = s.constraints[0].nodes;

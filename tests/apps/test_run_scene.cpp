@@ -57,6 +57,25 @@ void expect_homogeneous(const std::string& h5, Index step, const Mat3& F, const 
 // uniaxial_block stretched to l = 1.5: F = diag(l, t, t) with the closed-form lateral stretch,
 // sigma = diag(P11 / t^2, 0, 0). The solve leaves the nodes within 1e-8 m of the closed form (the
 // scene test), so F, the strain and the stress relative to their scale are within about 1e-7.
+// output.every N writes every N-th completed step and the last one (here 5 steps, N = 2: steps
+// 1, 3 and 4), with its own index and the same positions as a run that writes every step. (A
+// failed run's last completed step takes the same path: written when the driver returns.)
+TEST(RunScene, OutputEveryNStepsKeepsTheLast) {
+  const TemporaryResults all("every_1"), some("every_2");
+  const RunResult a = run(load("falling_bars", {"dynamic.duration=0.05"}), all.path);
+  const RunResult b =
+      run(load("falling_bars", {"dynamic.duration=0.05", "output.every=2"}), some.path);
+  ASSERT_TRUE(a.success && b.success) << a.message << b.message;
+  ASSERT_EQ(b.steps.size(), 5u) << "every step is still completed and kept";
+  EXPECT_EQ(read_results_summary(all.path).num_steps, 5);
+  EXPECT_EQ(read_results_summary(some.path).num_steps, 3);
+  for (Index index : {1, 3, 4}) {
+    const StepState written = read_step_state(some.path, index);
+    EXPECT_EQ(written.x, read_step_state(all.path, index).x) << "step " << index;
+  }
+  EXPECT_THROW(read_step_state(some.path, 2), InputError) << "step 2 is not written";
+}
+
 TEST(RunScene, UniaxialStressAndStrainReadBackMatchTheClosedForm) {
   const auto check = [](const std::string& material_json, const auto& model) {
     SCOPED_TRACE(material_json);

@@ -130,7 +130,7 @@ TEST_F(SceneFileTest, TimeIntegrationSettingsAreChecked) {
   };
   EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "rk4", "time_step": 1, "duration": 1})"))
                 .find("dynamic.integrator: unknown integrator 'rk4' (expected implicit_euler, "
-                      "newmark, symplectic_euler or arkode)"),
+                      "newmark, generalized_alpha, symplectic_euler, arkode or arkode_dirk)"),
             std::string::npos);
   EXPECT_NE(error(kValid, set("quasistatic", R"({"time_step": 1, "duration": 1})"))
                 .find("dynamic.viscosity: missing"),
@@ -169,6 +169,24 @@ TEST_F(SceneFileTest, TimeIntegrationSettingsAreChecked) {
                                              "mass": "consistent"})"))
                 .find("dynamic.mass: a consistent mass matrix needs an implicit integrator"),
             std::string::npos);
+  // The new integrators' settings: each "dynamic" section (time_step and duration 1) and the
+  // message that locates its error.
+  const std::pair<const char*, const char*> integrator_errors[] = {
+      {R"("integrator": "generalized_alpha", "generalized_alpha": {"rho_inf": 2})",
+       "dynamic.generalized_alpha.rho_inf: must be in [0, 1]"},
+      {R"("integrator": "newmark", "generalized_alpha": {})",
+       "dynamic.generalized_alpha: only for \"integrator\": \"generalized_alpha\""},
+      {R"("integrator": "arkode_dirk", "arkode": {"order": 8})",
+       "dynamic.arkode.order: must be 2, 3, 4 or 5 for arkode_dirk"},
+      {R"("integrator": "arkode_dirk", "mass": "consistent")",
+       "dynamic.mass: arkode_dirk takes the lumped mass matrix"}};
+  for (const auto& [section, message] : integrator_errors) {
+    const std::string d = std::string(R"({"time_step": 1, "duration": 1, )") + section + "}";
+    EXPECT_NE(error(kValid, set("dynamic", d)).find(message), std::string::npos) << section;
+  }
+  EXPECT_NE(
+      error(kValid, {parse_override(R"(output={"every": 0})")}).find("output.every: must be >= 1"),
+      std::string::npos);
 }
 
 TEST_F(SceneFileTest, MooneyRivlinTakesYoungsModulusAndPoissonsRatio) {
