@@ -31,6 +31,7 @@
 /// Q_i^{n+1} = h_i + gamma_i S_iso(C^{n+1}).
 
 #include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -49,9 +50,14 @@ struct PronySeries {
   bool empty() const { return weights.empty(); }
   /// beta_inf = 1 - sum beta_i: the share of the isochoric stiffness left at equilibrium.
   double equilibrium_weight() const;
-  /// Throws std::invalid_argument naming the entry ("weights[1] ...") when a weight is not
-  /// positive or finite, the weights sum to 1 or more, a time is not positive and finite, or
-  /// the two lists differ in length.
+  /// What is wrong with the series, if anything: a weight not positive and finite, weights
+  /// summing to 1 or more, a time not positive and finite, or lists of different lengths.
+  struct Problem {
+    std::string key;  ///< "weights", "weights[1]", "relaxation_times[0]"
+    std::string why;
+  };
+  std::optional<Problem> problem() const;
+  /// Throws std::invalid_argument "KEY: WHY" for the problem() there is.
   void validate() const;
 };
 
