@@ -140,7 +140,7 @@ double run_model(const M& m, const TetBlock& b, const Index* scatter, const Poin
 
 Elasticity::Elasticity(const Points& X, const TetIndices& tets, std::vector<ElasticGroup> groups,
                        const ElasticityOptions& options)
-    : options_(options) {
+    : options_(options), num_tets_(static_cast<Index>(tets.rows())) {
   for (size_t i = 0; i < groups.size(); ++i) {
     ElasticGroup& in = groups[i];
     try {
@@ -191,6 +191,20 @@ void Elasticity::complete_step(const Points& x) {
   dissipated_ = 0;
   for (Group& grp : groups_)
     if (grp.history) dissipated_ += grp.history->accept(grp.material, grp.block, x);
+}
+
+void Elasticity::report(const Points& /*x*/, StepRecord& step) const {
+  if (has_history()) step.dissipated_energy = dissipated_;
+}
+
+SymmetricColumns Elasticity::viscous_stress(const Points& x) const {
+  SymmetricColumns out = SymmetricColumns::Zero(num_tets_, 6);
+  for (const Group& grp : groups_) {
+    if (!grp.history) continue;
+    const SymmetricColumns rows = grp.history->viscous_stress(grp.block, x);
+    for (Index e = 0; e < grp.block.size(); ++e) out.row(grp.block.tet(e)) = rows.row(e);
+  }
+  return out;
 }
 
 void Elasticity::add_couplings(SparsityBuilder& builder) const {

@@ -57,6 +57,11 @@ class Elasticity final : public ForceModule {
   double dissipated_energy() const { return dissipated_; }
   /// Whether some group is viscoelastic in time (a time-dependent analysis).
   bool has_history() const;
+  /// With a history: the dissipated energy of the step (StepRecord::dissipated_energy).
+  void report(const Points& x, StepRecord& step) const override;
+  /// #tets x 6 (global tet order; xx, yy, zz, xy, yz, xz) Cauchy viscous stress of the last
+  /// accepted step at its positions x [Pa]; zero in elastic groups.
+  SymmetricColumns viscous_stress(const Points& x) const;
 
   /// Largest a such that every tet keeps det F > 0 along x + a dx, looked for up to a = 2 (a
   /// Newton step is at most 1); +infinity beyond.
@@ -74,6 +79,7 @@ class Elasticity final : public ForceModule {
   };
   std::vector<Group> groups_;
   ElasticityOptions options_;
+  Index num_tets_ = 0;
   double dissipated_ = 0;
 };
 

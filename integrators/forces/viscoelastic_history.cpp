@@ -158,10 +158,19 @@ double ViscoelasticHistory::accept(const MaterialModel& m, const TetBlock& b, co
   return dissipated;
 }
 
-SymmetricColumns ViscoelasticHistory::viscous_stress() const {
-  SymmetricColumns sum = SymmetricColumns::Zero(S_iso_.rows(), 6);
-  for (const SymmetricColumns& q : Q_) sum += q;
-  return sum;
+SymmetricColumns ViscoelasticHistory::viscous_stress(const TetBlock& b, const Points& x) const {
+  SymmetricColumns out = SymmetricColumns::Zero(b.size(), 6);
+  if (!timed_) return out;
+  tbb::parallel_for(tbb::blocked_range<Index>(0, b.size(), 1024),
+                    [&](const tbb::blocked_range<Index>& r) {
+                      for (Index e = r.begin(); e < r.end(); ++e) {
+                        Sym Q = Sym::Zero();
+                        for (const SymmetricColumns& q : Q_) Q += q.row(e);
+                        const Mat3 F = deformation(b, x, e);
+                        out.row(e) = to_sym(F * from_sym(Q) * F.transpose() / F.determinant());
+                      }
+                    });
+  return out;
 }
 
 }  // namespace depthfem

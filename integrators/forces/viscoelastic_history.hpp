@@ -61,8 +61,9 @@ class ViscoelasticHistory {
   /// model at small strain, where each branch is a spring of modulus beta_i mu and a dashpot.
   double accept(const MaterialModel& m, const TetBlock& b, const Points& x);
 
-  /// sum_i Q_i per row at the last accepted step [Pa] (second Piola-Kirchhoff).
-  SymmetricColumns viscous_stress() const;
+  /// The viscous stress sum_i Q_i of the last accepted step per row as a Cauchy stress at x
+  /// (that step's positions): F (sum_i Q_i) F^T / J [Pa].
+  SymmetricColumns viscous_stress(const TetBlock& b, const Points& x) const;
 
  private:
   PronySeries prony_;
