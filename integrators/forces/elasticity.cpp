@@ -178,6 +178,7 @@ bool Elasticity::has_history() const {
 }
 
 void Elasticity::begin_step(const Points& x) {
+  dissipated_ = 0;
   for (Group& grp : groups_)
     if (grp.history && !grp.history->started()) grp.history->start(grp.material, grp.block, x);
 }
@@ -188,7 +189,6 @@ void Elasticity::set_load(double load) {
 }
 
 void Elasticity::complete_step(const Points& x) {
-  dissipated_ = 0;
   for (Group& grp : groups_)
     if (grp.history) dissipated_ += grp.history->accept(grp.material, grp.block, x);
 }

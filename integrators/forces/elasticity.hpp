@@ -53,7 +53,8 @@ class Elasticity final : public ForceModule {
   void begin_step(const Points& x) override;
   void set_load(double load) override;
   void complete_step(const Points& x) override;
-  /// Energy [J] the viscoelastic groups dissipated over the last accepted step (0 without).
+  /// Energy [J] the viscoelastic groups dissipated since the last begin_step: over the step, in
+  /// as many accepted parts as it was completed in (ARKODE's internal steps; 0 without).
   double dissipated_energy() const { return dissipated_; }
   /// Whether some group is viscoelastic in time (a time-dependent analysis).
   bool has_history() const;

@@ -31,6 +31,7 @@ struct RhsData {
   const VectorX& mass;
   double alpha, duration;
   Index nodes;
+  double target = 0;  ///< end of the output interval being integrated [s]
   std::string error;
 };
 
@@ -62,6 +63,20 @@ int rhs(realtype t, N_Vector y_vec, N_Vector ydot_vec, void* user) {
   constraints.project(accel);
   ydot.head(n) = velocity;
   ydot.tail(n) = accel;
+  return 0;
+}
+
+// After every accepted internal step up to the output time: the modules' internal variables (a
+// viscoelastic history) move to it, so that the next stages relax from there. A step past the
+// output time (ARK_NORMAL steps past it and interpolates) is left to the step's completion at
+// the output time, which must not lie behind the history.
+int internal_step_done(realtype t, N_Vector y_vec, void* user) {
+  auto& d = *static_cast<RhsData*>(user);
+  if (t > d.target) return 0;
+  Points x = as_points(view(y_vec).head(3 * d.nodes));
+  d.lifecycle.constraints().impose(t / d.duration, x);
+  d.lifecycle.set_load(t / d.duration);
+  d.lifecycle.system().complete_step(x);
   return 0;
 }
 
@@ -102,7 +117,7 @@ void ArkodeStepper::run(Points& x, Points& v) {
       N_VNew_Serial(2 * n, ctx.get()));
   view(y.get()) << as_dofs(x), as_dofs(v);
 
-  RhsData data{lifecycle_, mass_, options_.damping.mass, options_.duration, nodes, {}};
+  RhsData data{lifecycle_, mass_, options_.damping.mass, options_.duration, nodes, 0.0, {}};
   const std::unique_ptr<void, StepperDeleter> mem(ERKStepCreate(rhs, 0.0, y.get(), ctx.get()));
   if (!mem) throw SolveError("arkode: ERKStepCreate failed");
   const ArkodeOptions& o = options_.arkode;
@@ -113,6 +128,7 @@ void ArkodeStepper::run(Points& x, Points& v) {
   check(ERKStepSetOrder(mem.get(), o.order), "ERKStepSetOrder");
   check(ERKStepSetMaxNumSteps(mem.get(), o.max_steps), "ERKStepSetMaxNumSteps");
   check(ERKStepSetStopTime(mem.get(), options_.duration), "ERKStepSetStopTime");
+  check(ERKStepSetPostprocessStepFn(mem.get(), internal_step_done), "ERKStepSetPostprocessStepFn");
 
   const Index steps = time_step_count(options_);
   long internal_before = 0;
@@ -120,6 +136,7 @@ void ArkodeStepper::run(Points& x, Points& v) {
   for (Index k = 0; k < steps; ++k) {
     const double target = step_end_time(options_, k);
     lifecycle_.begin(x, t_start / options_.duration);
+    data.target = target;
     realtype t = 0;
     const int flag = ERKStepEvolve(mem.get(), target, y.get(), &t, ARK_NORMAL);
     if (flag < 0) {

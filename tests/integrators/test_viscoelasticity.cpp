@@ -547,51 +547,63 @@ TEST(Viscoelasticity, CantileverLossFactorMatchesTheLinearViscoelasticPrediction
     one_mode = std::complex<double>(0, w0) * std::sqrt(1 - s + s * g(one_mode));
 
   const double period = 2 * std::numbers::pi / lambda.imag();
-  DynamicOptions o;
-  o.integrator = Integrator::kNewmark;
-  o.time_step = period / 200;
-  o.duration = 6 * period;
-  o.newton.linear.kind = LinearSolverKind::kDirect;
-  // Elastic forces ~1e-2 N beside inertia terms of 1e5 N/m x 1 m that cancel to round-off
-  // (1e-11 N); the energy's round-off is coarser still, so the residual decides the line search.
-  o.newton.line_search = LineSearchRule::kResidual;
-  o.newton.tolerance = 1e-9;  // [N]
-  PhaseTimers timers;
-  System system(nodes, timers);
-  system.add(std::make_unique<Elasticity>(  // its time: load * the integrator's duration
-      m.X, m.tets, std::vector{viscoelastic_group(m, nh, {{beta}, {tau}})},
-      ElasticityOptions{.duration = o.duration}));
-  NodalSpring* inertia = &system.add(std::make_unique<NodalSpring>("inertia", mass));
-  std::vector<double> t, q;
-  VectorX Mphi = phi;
-  for (Index i = 0; i < nodes; ++i) Mphi.segment<3>(3 * i) *= mass(i);
-  StepLifecycle lifecycle(system, constraints, {},
-                          [&](const StepRecord& step, const Points& x, const Points*) {
-                            t.push_back(step.load);
-                            q.push_back(Mphi.dot(as_dofs(x) - as_dofs(m.X)));
-                          });
-  Points x = m.X, v = as_points(1e-3 / phi.cwiseAbs().maxCoeff() * phi);
-  ImplicitStepper(lifecycle, {inertia, {}}, o).run(x, v);
+  for (Integrator scheme : {Integrator::kNewmark, Integrator::kArkode}) {
+    SCOPED_TRACE(scheme == Integrator::kNewmark ? "newmark" : "arkode");
+    DynamicOptions o;
+    o.integrator = scheme;
+    o.time_step = period / (scheme == Integrator::kNewmark ? 200 : 50);  // ARKODE: output interval
+    o.duration = 6 * period;
+    o.arkode.relative_tolerance = 1e-8;
+    o.arkode.absolute_tolerance = 1e-11;  // [m], [m/s]: amplitudes ~3e-4 m
+    o.newton.linear.kind = LinearSolverKind::kDirect;
+    // Elastic forces ~1e-2 N beside inertia terms of 1e5 N/m x 1 m that cancel to round-off
+    // (1e-11 N); the energy's round-off is coarser still, so the residual decides the line
+    // search.
+    o.newton.line_search = LineSearchRule::kResidual;
+    o.newton.tolerance = 1e-9;  // [N]
+    PhaseTimers timers;
+    System system(nodes, timers);
+    system.add(std::make_unique<Elasticity>(  // its time: load * the integrator's duration
+        m.X, m.tets, std::vector{viscoelastic_group(m, nh, {{beta}, {tau}})},
+        ElasticityOptions{.duration = o.duration}));
+    NodalSpring* inertia = scheme == Integrator::kNewmark
+                               ? &system.add(std::make_unique<NodalSpring>("inertia", mass))
+                               : nullptr;
+    std::vector<double> t, q;
+    VectorX Mphi = phi;
+    for (Index i = 0; i < nodes; ++i) Mphi.segment<3>(3 * i) *= mass(i);
+    StepLifecycle lifecycle(system, constraints, {},
+                            [&](const StepRecord& step, const Points& x, const Points*) {
+                              t.push_back(step.load);
+                              q.push_back(Mphi.dot(as_dofs(x) - as_dofs(m.X)));
+                            });
+    Points x = m.X, v = as_points(1e-3 / phi.cwiseAbs().maxCoeff() * phi);
+    if (inertia) {
+      ImplicitStepper(lifecycle, {inertia, {}}, o).run(x, v);
+    } else {
+      ArkodeStepper(lifecycle, mass, o).run(x, v);
+    }
 
-  // Peaks of |q| after the first period, by a parabola through each local maximum and its
-  // neighbours; decrement per period from successive peaks of one sign (two half periods).
-  std::vector<double> peak_t, peak_a;
-  for (size_t k = 1; k + 1 < q.size(); ++k) {
-    const double a = std::abs(q[k - 1]), b = std::abs(q[k]), c = std::abs(q[k + 1]);
-    if (t[k] < period || !(b > a && b >= c)) continue;
-    const double shift = 0.5 * (a - c) / (a - 2 * b + c);
-    peak_t.push_back(t[k] + shift * o.time_step);
-    peak_a.push_back(b - 0.25 * (a - c) * shift);
+    // Peaks of |q| after the first period, by a parabola through each local maximum and its
+    // neighbours; decrement per period from successive peaks of one sign (two half periods).
+    std::vector<double> peak_t, peak_a;
+    for (size_t k = 1; k + 1 < q.size(); ++k) {
+      const double a = std::abs(q[k - 1]), b = std::abs(q[k]), c = std::abs(q[k + 1]);
+      if (t[k] < period || !(b > a && b >= c)) continue;
+      const double shift = 0.5 * (a - c) / (a - 2 * b + c);
+      peak_t.push_back(t[k] + shift * o.time_step);
+      peak_a.push_back(b - 0.25 * (a - c) * shift);
+    }
+    ASSERT_GE(peak_a.size(), 9u);
+    const size_t last = peak_a.size() - 1, half_periods = last & ~size_t(1);
+    const double decrement = std::log(peak_a[0] / peak_a[half_periods]) / (half_periods / 2.0);
+    const double frequency = std::numbers::pi * half_periods / (peak_t[half_periods] - peak_t[0]);
+    EXPECT_NEAR(decrement, predicted_decrement, 0.005 * predicted_decrement)
+        << "loss factor " << decrement / std::numbers::pi << ", predicted "
+        << predicted_decrement / std::numbers::pi << "; one-mode estimate (s = " << s << ") "
+        << 2 * -one_mode.real() / one_mode.imag();
+    EXPECT_NEAR(frequency, lambda.imag(), 1e-3 * lambda.imag());
   }
-  ASSERT_GE(peak_a.size(), 9u);
-  const size_t last = peak_a.size() - 1, half_periods = last & ~size_t(1);
-  const double decrement = std::log(peak_a[0] / peak_a[half_periods]) / (half_periods / 2.0);
-  const double frequency = std::numbers::pi * half_periods / (peak_t[half_periods] - peak_t[0]);
-  EXPECT_NEAR(decrement, predicted_decrement, 0.005 * predicted_decrement)
-      << "loss factor " << decrement / std::numbers::pi << ", predicted "
-      << predicted_decrement / std::numbers::pi << "; one-mode estimate (s = " << s << ") "
-      << 2 * -one_mode.real() / one_mode.imag();
-  EXPECT_NEAR(frequency, lambda.imag(), 1e-3 * lambda.imag());
 }
 
 }  // namespace
