@@ -198,25 +198,24 @@ TEST_F(SceneFileTest, ViscoelasticMaterialsTakeAPronySeries) {
   EXPECT_TRUE(load_scene(write(kValid), ve(R"({"relaxation_times": [1], "weights": [0.5]})"))
                   .groups.at(0)
                   .viscoelastic.static_relaxed);
-  const std::string at = "bodies[0].material.viscoelastic.";
-  EXPECT_NE(error(kValid, ve(R"({"relaxation_times": [0.1, -1], "weights": [0.2, 0.3]})"))
-                .find(at + "relaxation_times[1]: is -1 s; each relaxation time must be > 0"),
-            std::string::npos);
-  EXPECT_NE(error(kValid, ve(R"({"relaxation_times": [0.1], "weights": [0]})"))
-                .find(at + "weights[0]: is 0; each weight must be > 0"),
-            std::string::npos);
-  EXPECT_NE(error(kValid, ve(R"({"relaxation_times": [0.1, 1], "weights": [0.7, 0.4]})"))
-                .find(at + "weights: they sum to 1.1; they must sum to less than 1"),
-            std::string::npos);
-  EXPECT_NE(error(kValid, ve(R"({"relaxation_times": [0.1], "weights": [0.2, 0.1]})"))
-                .find(at + "weights: 2 weights for 1 relaxation times"),
-            std::string::npos);
-  EXPECT_NE(error(kValid, ve(R"({"relaxation_times": [], "weights": []})"))
-                .find(at + "relaxation_times: expected a non-empty array of numbers"),
-            std::string::npos);
-  EXPECT_NE(error(kValid, ve(R"({"relaxation_times": [1], "weights": [0.5], "tau": 1})"))
-                .find(at + "tau"),
-            std::string::npos);
+  // Each bad section with the start of its one-line error.
+  const std::pair<const char*, const char*> bad[] = {
+      {R"({"relaxation_times": [0.1, -1], "weights": [0.2, 0.3]})",
+       "relaxation_times[1]: is -1 s; each relaxation time must be > 0"},
+      {R"({"relaxation_times": [0.1], "weights": [0]})",
+       "weights[0]: is 0; each weight must be > 0"},
+      {R"({"relaxation_times": [0.1, 1], "weights": [0.7, 0.4]})",
+       "weights: they sum to 1.1; they must sum to less than 1"},
+      {R"({"relaxation_times": [0.1], "weights": [0.2, 0.1]})",
+       "weights: 2 weights for 1 relaxation times"},
+      {R"({"relaxation_times": [], "weights": []})",
+       "relaxation_times: expected a non-empty array of numbers"},
+      {R"({"relaxation_times": [1], "weights": [0.5], "tau": 1})", "tau"}};
+  for (const auto& [section, message] : bad)
+    EXPECT_NE(
+        error(kValid, ve(section)).find("bodies[0].material.viscoelastic." + std::string(message)),
+        std::string::npos)
+        << section;
 }
 
 TEST_F(SceneFileTest, OverridesReachNestedKeys) {

@@ -21,6 +21,7 @@
 #include "core/mass.hpp"
 #include "core/mesh_generators.hpp"
 #include "finite_differences.hpp"
+#include "integrators/assembled.hpp"
 #include "integrators/forces/elasticity.hpp"
 #include "integrators/forces/gravity.hpp"
 #include "integrators/solvers/arkode_stepper.hpp"
@@ -35,38 +36,15 @@ const PronySeries kTwoTerms{{0.3, 0.25}, {0.05, 0.4}};
 
 ElasticGroup viscoelastic_group(const TetMesh& m, const MaterialModel& model,
                                 const PronySeries& prony) {
-  ElasticGroup g{model, std::vector<Index>(m.tets.rows()), Points(), prony};
-  std::iota(g.tets.begin(), g.tets.end(), 0);
-  if (material_uses_fiber(model))
-    g.fibers = Vec3(1, 2, 0.5).normalized().transpose().replicate(m.tets.rows(), 1);
+  ElasticGroup g = testing::whole_mesh(m, model, Vec3(1, 2, 0.5).normalized());
+  g.viscoelastic = prony;
   return g;
 }
 
-// X under a random affine map near the identity plus nodal noise of `noise` [m].
-Points deformed(const Points& X, double noise, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1, 1);
-  Mat3 A = Mat3::Identity();
-  for (int k = 0; k < 9; ++k) A(k) += 0.15 * u(rng);
-  Points x = X * A.transpose();
-  for (Index i = 0; i < x.size(); ++i) x(i) += noise * u(rng);
-  return x;
-}
+using testing::perturbed;
 
-struct Evaluated {
-  double energy;
-  VectorX gradient;
-  BlockSparseMatrix hessian;
-};
-
-Evaluated evaluate_all(Elasticity& e, const Points& x) {
-  SparsityBuilder builder(static_cast<Index>(x.rows()));
-  e.add_couplings(builder);
-  Evaluated r{0, VectorX::Zero(x.size()), BlockSparseMatrix(builder)};
-  e.bind(r.hessian);
-  r.energy = e.evaluate(x, &r.gradient, &r.hessian);
-  return r;
-}
+using testing::assemble;
+using testing::Assembled;
 
 // A group whose history is not zero: started at x0, a step accepted at x1 (t = 0.1 s), and the
 // current step ending at t = 0.25 s.
@@ -82,37 +60,18 @@ Elasticity with_history(const TetMesh& m, const MaterialModel& model, const Poin
   return e;
 }
 
-// Central differences with step 1e-7 on positions of order 0.1 m (see test_elasticity.cpp):
-// about 1e-7 relative, asserted at 1e-6. The 3 x 2 x 2 box has 72 tets: batched rows and
-// scalar remainders both take part.
+// Central differences as in integrators/assembled.hpp. The 3 x 2 x 2 box has 72 tets: batched
+// rows and scalar remainders both take part.
 TEST(Viscoelasticity, StepPotentialDerivativesMatchFiniteDifferences) {
   const TetMesh m = box_mesh({Vec3::Zero(), Vec3(0.3, 0.2, 0.2), Eigen::Vector3i(3, 2, 2)});
-  const Points x0 = deformed(m.X, 0.005, 1), x1 = deformed(m.X, 0.005, 2),
-               x = deformed(m.X, 0.005, 3);
+  const Points x0 = perturbed(m.X, 0.005, 1), x1 = perturbed(m.X, 0.005, 2),
+               x = perturbed(m.X, 0.005, 3);
   std::mt19937 rng(5);
-  std::normal_distribution<double> n;
   for (const MaterialModel& model : all_models()) {
     Elasticity e = with_history(m, model, x0, x1);
-    const Evaluated r = evaluate_all(e, x);
+    const Assembled r = assemble(e, x);
     ASSERT_TRUE(std::isfinite(r.energy));
-    const double h = 1e-7;
-    const VectorX g_fd = testing::central_gradient_dofs(
-        [&](const Points& y) { return e.evaluate(y, nullptr, nullptr); }, x, h);
-    EXPECT_LE((r.gradient - g_fd).cwiseAbs().maxCoeff(), 1e-6 * r.gradient.cwiseAbs().maxCoeff())
-        << material_name(model);
-    const Eigen::SparseMatrix<double> H = r.hessian.to_sparse();
-    for (int trial = 0; trial < 3; ++trial) {
-      VectorX v(x.size());
-      for (Index i = 0; i < v.size(); ++i) v(i) = n(rng);
-      const auto gradient = [&](const VectorX& z) {
-        VectorX g = VectorX::Zero(z.size());
-        e.evaluate(as_points(z), &g, nullptr);
-        return g;
-      };
-      const VectorX Hv = H * v, Hv_fd = testing::central_directional(gradient, as_dofs(x), v, h);
-      EXPECT_LE((Hv - Hv_fd).cwiseAbs().maxCoeff(), 1e-6 * Hv.cwiseAbs().maxCoeff())
-          << material_name(model);
-    }
+    testing::expect_derivatives_match(e, x, r, rng, material_name(model));
   }
 }
 
@@ -120,10 +79,11 @@ TEST(Viscoelasticity, StepPotentialDerivativesMatchFiniteDifferences) {
 // included.
 TEST(Viscoelasticity, ProjectedStepHessianIsPositiveSemiDefinite) {
   const TetMesh m = box_mesh({Vec3::Zero(), Vec3(0.3, 0.2, 0.2), Eigen::Vector3i(3, 2, 2)});
-  const Points x0 = deformed(m.X, 0.02, 1), x1 = deformed(m.X, 0.02, 2), x = deformed(m.X, 0.02, 3);
+  const Points x0 = perturbed(m.X, 0.02, 1), x1 = perturbed(m.X, 0.02, 2),
+               x = perturbed(m.X, 0.02, 3);
   for (const MaterialModel& model : all_models()) {
     Elasticity e = with_history(m, model, x0, x1, true);
-    const Eigen::MatrixXd H(evaluate_all(e, x).hessian.to_sparse());
+    const Eigen::MatrixXd H(assemble(e, x).hessian.to_sparse());
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(H);
     EXPECT_GE(eig.eigenvalues().minCoeff(), -1e-9 * eig.eigenvalues().cwiseAbs().maxCoeff())
         << material_name(model);
@@ -134,32 +94,32 @@ TEST(Viscoelasticity, ProjectedStepHessianIsPositiveSemiDefinite) {
 // same step gives the same bits before and after them.
 TEST(Viscoelasticity, OnlyAnAcceptedStepMovesTheHistory) {
   const TetMesh m = box_mesh({Vec3::Zero(), Vec3(0.3, 0.2, 0.2), Eigen::Vector3i(3, 2, 2)});
-  const Points x0 = deformed(m.X, 0.005, 1), x1 = deformed(m.X, 0.005, 2),
-               x = deformed(m.X, 0.005, 3), elsewhere = deformed(m.X, 0.005, 4);
+  const Points x0 = perturbed(m.X, 0.005, 1), x1 = perturbed(m.X, 0.005, 2),
+               x = perturbed(m.X, 0.005, 3), elsewhere = perturbed(m.X, 0.005, 4);
   Elasticity e = with_history(m, MooneyRivlin{4e3, 1e3, 2e4}, x0, x1);
-  const Evaluated before = evaluate_all(e, x);
+  const Assembled before = assemble(e, x);
   e.set_load(0.6);  // a longer attempt, evaluated, then given up
-  evaluate_all(e, elsewhere);
+  assemble(e, elsewhere);
   e.begin_step(x1);  // a new attempt from the accepted state
   e.set_load(0.25);
-  const Evaluated after = evaluate_all(e, x);
+  const Assembled after = assemble(e, x);
   EXPECT_EQ(before.energy, after.energy);
   EXPECT_EQ((before.gradient - after.gradient).cwiseAbs().maxCoeff(), 0.0);
   // Accepting moves it: the same configuration and step length now give another energy.
   e.complete_step(x);
   e.begin_step(x);
   e.set_load(0.4);
-  EXPECT_NE(evaluate_all(e, x).energy, before.energy);
+  EXPECT_NE(assemble(e, x).energy, before.energy);
 }
 
 TEST(Viscoelasticity, SameResultsOnOneAndTwoThreads) {
   const TetMesh m = box_mesh({Vec3::Zero(), Vec3(1, 0.5, 0.5), Eigen::Vector3i(12, 6, 6)});
-  const Points x0 = deformed(m.X, 0.005, 1), x1 = deformed(m.X, 0.005, 2),
-               x = deformed(m.X, 0.005, 3);
+  const Points x0 = perturbed(m.X, 0.005, 1), x1 = perturbed(m.X, 0.005, 2),
+               x = perturbed(m.X, 0.005, 3);
   auto run = [&](int threads) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
     Elasticity e = with_history(m, MooneyRivlin{4e3, 1e3, 2e4}, x0, x1);
-    Evaluated r = evaluate_all(e, x);
+    Assembled r = assemble(e, x);
     e.complete_step(x);
     return std::make_pair(std::move(r), e.dissipated_energy());
   };
@@ -433,7 +393,7 @@ TEST(Viscoelasticity, EveryIntegratorFollowsAConstantStrainRate) {
 // instantaneous one, as the series says, and never keeps a history.
 TEST(Viscoelasticity, StaticAnalysisUsesTheEquilibriumOrInstantaneousModel) {
   const TetMesh m = box_mesh({Vec3::Zero(), Vec3(0.3, 0.2, 0.2), Eigen::Vector3i(3, 2, 2)});
-  const Points x = deformed(m.X, 0.005, 3);
+  const Points x = perturbed(m.X, 0.005, 3);
   const MooneyRivlin mr{4e3, 1e3, 2e4};
   for (bool relaxed : {true, false}) {
     PronySeries prony = kTwoTerms;
@@ -499,7 +459,7 @@ TEST(Viscoelasticity, CantileverLossFactorMatchesTheLinearViscoelasticPrediction
   // lambda) there, so K_G = K(mu + 1, lambda - 2/3) - K(mu, lambda) exactly (up to round-off).
   const auto stiffness = [&](const NeoHookean& model) {
     Elasticity e(m.X, m.tets, {viscoelastic_group(m, model, {})});
-    return Eigen::MatrixXd(evaluate_all(e, m.X).hessian.to_sparse());
+    return Eigen::MatrixXd(assemble(e, m.X).hessian.to_sparse());
   };
   const Eigen::MatrixXd K = stiffness(nh),
                         K_G = nh.mu * (stiffness({nh.mu + 1, nh.lambda - 2.0 / 3.0}) - K);

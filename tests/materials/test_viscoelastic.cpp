@@ -10,6 +10,7 @@
 #include "finite_differences.hpp"
 #include "materials/all_models.hpp"
 #include "materials/batched_stress.hpp"
+#include "materials/random_state.hpp"
 #include "materials/viscoelastic.hpp"
 
 namespace depthfem {
@@ -18,22 +19,7 @@ namespace {
 using Mat3 = Eigen::Matrix3d;
 using Vec3 = Eigen::Vector3d;
 
-// Random F = I + 0.35 * noise with det F >= 0.3, and a random unit fiber direction.
-struct RandomState {
-  std::mt19937 rng{4321};
-  Mat3 F() {
-    std::uniform_real_distribution<double> u(-1, 1);
-    for (;;) {
-      Mat3 F = Mat3::Identity();
-      for (int i = 0; i < 9; ++i) F(i) += 0.35 * u(rng);
-      if (F.determinant() >= 0.3) return F;
-    }
-  }
-  Vec3 fiber() {
-    std::normal_distribution<double> n;
-    return Vec3(n(rng), n(rng), n(rng)).normalized();
-  }
-};
+using testing::RandomState;
 
 // psi - (1 - s) psi(J^-1/3 F): the scaled model from its definition, not through invariants.
 template <class M>
@@ -43,7 +29,7 @@ double scaled_by_definition(const M& m, double s, const Mat3& F, const Vec3& f) 
 }
 
 TEST(Viscoelastic, ScaledEnergyIsTheModelLessItsIsochoricPart) {
-  RandomState rnd;
+  RandomState rnd(4321);
   for (const MaterialModel& model : all_models()) {
     std::visit(
         [&](const auto& m) {
@@ -68,7 +54,7 @@ TEST(Viscoelastic, ScaledEnergyIsTheModelLessItsIsochoricPart) {
 // Central differences as in test_hyperelastic.cpp: step 1e-6 on entries of order 1, relative
 // 1e-6 of the largest entry.
 TEST(Viscoelastic, ScaledStressAndTangentMatchFiniteDifferences) {
-  RandomState rnd;
+  RandomState rnd(4321);
   for (const MaterialModel& model : all_models()) {
     std::visit(
         [&](const auto& m) {
@@ -99,7 +85,7 @@ TEST(Viscoelastic, ScaledStressAndTangentMatchFiniteDifferences) {
 
 // F S_iso = d psi(J^-1/3 F) / dF, the isochoric part's first Piola stress.
 TEST(Viscoelastic, IsochoricStressIsTheDerivativeOfTheIsochoricEnergy) {
-  RandomState rnd;
+  RandomState rnd(4321);
   for (const MaterialModel& model : all_models()) {
     std::visit(
         [&](const auto& m) {
@@ -127,7 +113,7 @@ TEST(Viscoelastic, IsochoricStressIsTheDerivativeOfTheIsochoricEnergy) {
 
 TEST(Viscoelastic, BatchedScaledStressMatchesTheScalarOne) {
   using V = Lanes<kLanes>;
-  RandomState rnd;
+  RandomState rnd(4321);
   for (const MaterialModel& model : all_models()) {
     std::visit(
         [&](const auto& m) {
