@@ -40,6 +40,9 @@ ResultFields result_fields(const Scene& scene) {
   fields.velocity = scene.analysis != Analysis::kStatic;
   fields.contact =
       fields.contact && (scene.contact == ContactModel::kMaterialDepth || !scene.obstacles.empty());
+  fields.viscous = fields.velocity && std::ranges::any_of(scene.groups, [](const ElasticGroup& g) {
+                     return !g.viscoelastic.empty();
+                   });
   return fields;
 }
 
@@ -261,6 +264,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     if (fields.stress || fields.strain) {
       PhaseTimers::Scope t(result.timers, "output: element fields");
       elements = element_fields(mesh.X, mesh.tets, scene.groups, x, {fields.stress, fields.strain});
+    }
+    if (fields.viscous) {
+      PhaseTimers::Scope t(result.timers, "output: element fields");
+      elements.viscous_stress = model->elasticity->viscous_stress(x);
     }
     PhaseTimers::Scope t(result.timers, "output: results file");
     file->append_step(step, x, v, &elements);

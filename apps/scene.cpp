@@ -139,8 +139,21 @@ LoadedMesh make_mesh(const MeshSpec& spec, const JsonObject& m) {
   }
 }
 
+// A material's "viscoelastic" section: a Prony series on its isochoric stress.
+PronySeries read_viscoelastic(JsonObject v) {
+  PronySeries p;
+  p.times = v.numbers("relaxation_times");
+  p.weights = v.numbers("weights");
+  p.static_relaxed = v.choice("static_modulus", "static modulus",
+                              {std::pair{"equilibrium", true}, std::pair{"instantaneous", false}});
+  if (const std::optional<PronySeries::Problem> problem = p.problem())
+    v.fail(problem->key, problem->why);
+  v.finish();
+  return p;
+}
+
 // Material parameters by model name; the keys are those of the model's struct.
-MaterialModel read_material(JsonObject m, Vec3& fiber_direction) {
+MaterialModel read_material(JsonObject m, Vec3& fiber_direction, PronySeries& viscoelastic) {
   const std::string model = m.string("model");
   MaterialModel out;
   // Young's modulus and Poisson's ratio are converted by the model; range errors are reported
@@ -182,6 +195,7 @@ MaterialModel read_material(JsonObject m, Vec3& fiber_direction) {
             "fiber_mooney_rivlin or fiber_veronda)");
   }
   if (material_uses_fiber(out)) fiber_direction = m.vec3("fiber_direction");
+  if (m.has("viscoelastic")) viscoelastic = read_viscoelastic(m.object("viscoelastic"));
   try {
     validate_material(out);
   } catch (const std::invalid_argument& e) {
@@ -201,7 +215,8 @@ struct BodyMaterial {
   std::string region;
   MaterialModel model;
   Vec3 fiber = Vec3::UnitX();
-  std::string path;  // the scene key, for messages
+  PronySeries viscoelastic;  // empty: elastic
+  std::string path;          // the scene key, for messages
 };
 
 // Reads "material" (one for the whole body) or "materials" ({region: material}); the region
@@ -211,7 +226,7 @@ std::vector<BodyMaterial> read_body_materials(JsonObject& b) {
   if (!b.has("materials")) {
     const JsonObject m = b.object("material");
     BodyMaterial& one = out.emplace_back();
-    one.model = read_material(m, one.fiber);
+    one.model = read_material(m, one.fiber, one.viscoelastic);
     one.path = m.path();
     return out;
   }
@@ -221,7 +236,7 @@ std::vector<BodyMaterial> read_body_materials(JsonObject& b) {
     const JsonObject m = ms.object(region);
     BodyMaterial& one = out.emplace_back();
     one.region = region;
-    one.model = read_material(m, one.fiber);
+    one.model = read_material(m, one.fiber, one.viscoelastic);
     one.path = m.path();
   }
   if (out.empty()) b.fail("materials", "names no region");
@@ -436,6 +451,7 @@ void read_dynamic(JsonObject d, Scene& scene) {
   o.duration = d.number("duration");
   if (!(o.time_step > 0)) d.fail("time_step", "must be > 0");
   if (!(o.duration >= o.time_step)) d.fail("duration", "must be >= time_step");
+  scene.elasticity.duration = o.duration;  // viscoelastic groups: time = load * duration
   const double steps = std::ceil(o.duration / o.time_step - 1e-9);
   if (!(steps <= kMaxSteps)) {
     d.fail("time_step", "duration / time_step asks for " + number_text(steps) +
@@ -802,7 +818,8 @@ void add_body(const BodySpec& b, Scene& scene, std::vector<std::string>& materia
         const auto it = std::ranges::find(body.regions, m.region, &Region::name);
         tets = it != body.regions.end() ? *it : Region{};
       }
-      ElasticGroup g{.material = m.model, .tets = {}, .fibers = Points()};
+      ElasticGroup g{
+          .material = m.model, .tets = {}, .fibers = Points(), .viscoelastic = m.viscoelastic};
       for (Index t = 0; t < tets.num_tets; ++t) g.tets.push_back(tets.first_tet + t);
       if (material_uses_fiber(g.material))
         g.fibers = m.fiber.transpose().replicate(static_cast<Index>(g.tets.size()), 1);

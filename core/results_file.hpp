@@ -56,6 +56,9 @@ struct ResultFields {
   bool stress = false;       ///< Cauchy stress and von Mises stress per tet
   bool strain = false;       ///< logarithmic strain and volume ratio per tet
   bool contact = false;      ///< pressure, traction, gap and contact fraction per boundary triangle
+  /// Dissipated energy per step and viscous stress per tet (viscoelastic materials in a
+  /// time-dependent analysis).
+  bool viscous = false;
 };
 
 /// Metadata of a run written to /run at creation, and what its steps will hold.

@@ -53,6 +53,8 @@ struct ElementFields {
   VectorX von_mises;                                ///< #tets von Mises stress [Pa]
   Eigen::Matrix<double, Eigen::Dynamic, 6> strain;  ///< #tets x 6 logarithmic strain ln V [-]
   VectorX volume_ratio;                             ///< #tets J = det F [-]
+  /// #tets x 6 Cauchy viscous stress of viscoelastic materials [Pa] (zero in elastic tets)
+  Eigen::Matrix<double, Eigen::Dynamic, 6> viscous_stress;
 };
 
 /// One completed step.
@@ -79,6 +81,9 @@ struct StepRecord {
   /// Deepest geometric penetration [m] of the material-depth contact pairs (deepest_penetration;
   /// set by the scene runner), absent without material-depth contact.
   std::optional<double> penetration;
+  /// Energy [J] the viscoelastic materials dissipated over the step, absent without them (or in
+  /// a static analysis).
+  std::optional<double> dissipated_energy;
 
   /// Total contact area [m^2] over all interfaces.
   double contact_area() const {

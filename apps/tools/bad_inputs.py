@@ -268,6 +268,22 @@ def cases(exe):
                        ("displacement 1e300", setter(["boundary", 1, "displacement"],
                                                      [1e300, 0, 0]))]:
         add("non-finite arithmetic and bad numbers", name, {"scene.json": scene(edit)})
+    viscoelastic = material + ["viscoelastic"]
+    ve = lambda times, weights: setter(viscoelastic,
+                                       {"relaxation_times": times, "weights": weights})
+    for name, edit in [("relaxation time negative", ve([0.1, -1], [0.2, 0.3])),
+                       ("relaxation time zero", ve([0], [0.2])),
+                       ("relaxation time 1e400", ve([1e400], [0.2])),
+                       ("Prony weight zero", ve([0.1], [0])),
+                       ("Prony weight negative", ve([0.1], [-0.2])),
+                       ("Prony weights summing to 1", ve([0.1, 1], [0.6, 0.4])),
+                       ("Prony weights summing to more than 1", ve([0.1, 1], [0.7, 0.9])),
+                       ("more weights than times", ve([0.1], [0.2, 0.3])),
+                       ("no relaxation times", ve([], [])),
+                       ("unknown static modulus",
+                        setter(viscoelastic, {"relaxation_times": [1], "weights": [0.5],
+                                              "static_modulus": "relaxed"}))]:
+        add("non-finite arithmetic and bad numbers", name, {"scene.json": scene(edit)})
 
     # JSON.
     valid = scene()

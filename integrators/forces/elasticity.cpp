@@ -112,21 +112,35 @@ double run_rows(const M& m, const TetBlock& b, const Index* scatter, const Point
   return energy;
 }
 
-// The chunks of a block color by color (run_by_color: deterministic for any number of threads).
+// The chunks of a block color by color (run_by_color: deterministic for any number of threads),
+// each chunk with its viscoelastic history term when the group has one.
 template <int kOrder, class M>
 double run_group(const M& m, const TetBlock& b, const Index* scatter, const Points& x, VectorX* g,
-                 BlockSparseMatrix* H, bool project) {
+                 BlockSparseMatrix* H, bool project, const ViscoelasticHistory* history) {
   return run_by_color(b.color_begin, 0.0, [&](Index k) {
-    return run_rows<kOrder>(m, b, scatter, x, b.chunk_begin[k], b.chunk_begin[k + 1], g, H,
-                            project);
+    const Index begin = b.chunk_begin[k], end = b.chunk_begin[k + 1];
+    double energy = run_rows<kOrder>(m, b, scatter, x, begin, end, g, H, project);
+    if (history) energy += history->evaluate_rows(b, scatter, x, begin, end, g, H, project);
+    return energy;
   });
+}
+
+// A group's model: the material as given, or with its isochoric part scaled as the viscoelastic
+// history says (materials/viscoelastic.hpp).
+template <int kOrder, class M>
+double run_model(const M& m, const TetBlock& b, const Index* scatter, const Points& x, VectorX* g,
+                 BlockSparseMatrix* H, bool project,
+                 const std::optional<ViscoelasticHistory>& history) {
+  if (!history) return run_group<kOrder>(m, b, scatter, x, g, H, project, nullptr);
+  return run_group<kOrder>(IsochoricScaled<M>{m, history->isochoric_scale()}, b, scatter, x, g, H,
+                           project, &*history);
 }
 
 }  // namespace
 
 Elasticity::Elasticity(const Points& X, const TetIndices& tets, std::vector<ElasticGroup> groups,
                        const ElasticityOptions& options)
-    : options_(options) {
+    : options_(options), num_tets_(static_cast<Index>(tets.rows())) {
   for (size_t i = 0; i < groups.size(); ++i) {
     ElasticGroup& in = groups[i];
     try {
@@ -144,8 +158,53 @@ Elasticity::Elasticity(const Points& X, const TetIndices& tets, std::vector<Elas
                          ", outside 0.." + std::to_string(tets.rows() - 1));
       }
     }
-    groups_.push_back({in.material, make_tet_block(X, tets, in.tets, in.fibers), {}});
+    if (!in.viscoelastic.empty()) {
+      try {
+        in.viscoelastic.validate();
+      } catch (const std::invalid_argument& e) {
+        throw InputError("material group " + std::to_string(i) + ": viscoelastic: " + e.what());
+      }
+    }
+    Group& grp = groups_.emplace_back(in.material, make_tet_block(X, tets, in.tets, in.fibers));
+    if (!in.viscoelastic.empty())
+      grp.history.emplace(in.viscoelastic, grp.block.size(), options_.duration > 0);
   }
+}
+
+bool Elasticity::has_history() const {
+  for (const Group& grp : groups_)
+    if (grp.history && grp.history->timed()) return true;
+  return false;
+}
+
+void Elasticity::begin_step(const Points& x) {
+  dissipated_ = 0;
+  for (Group& grp : groups_)
+    if (grp.history && !grp.history->started()) grp.history->start(grp.material, grp.block, x);
+}
+
+void Elasticity::set_load(double load) {
+  for (Group& grp : groups_)
+    if (grp.history) grp.history->set_time(load * options_.duration);
+}
+
+void Elasticity::complete_step(const Points& x) {
+  for (Group& grp : groups_)
+    if (grp.history) dissipated_ += grp.history->accept(grp.material, grp.block, x);
+}
+
+void Elasticity::report(const Points& /*x*/, StepRecord& step) const {
+  if (has_history()) step.dissipated_energy = dissipated_;
+}
+
+SymmetricColumns Elasticity::viscous_stress(const Points& x) const {
+  SymmetricColumns out = SymmetricColumns::Zero(num_tets_, 6);
+  for (const Group& grp : groups_) {
+    if (!grp.history) continue;
+    const SymmetricColumns rows = grp.history->viscous_stress(grp.block, x);
+    for (Index e = 0; e < grp.block.size(); ++e) out.row(grp.block.tet(e)) = rows.row(e);
+  }
+  return out;
 }
 
 void Elasticity::add_couplings(SparsityBuilder& builder) const {
@@ -175,10 +234,11 @@ double Elasticity::evaluate(const Points& x, VectorX* gradient, BlockSparseMatri
     total += std::visit(
         [&](const auto& m) {
           if (hessian)
-            return run_group<2>(m, grp.block, grp.scatter.data(), x, gradient, hessian,
-                                options_.project_hessian);
-          if (gradient) return run_group<1>(m, grp.block, nullptr, x, gradient, nullptr, false);
-          return run_group<0>(m, grp.block, nullptr, x, nullptr, nullptr, false);
+            return run_model<2>(m, grp.block, grp.scatter.data(), x, gradient, hessian,
+                                options_.project_hessian, grp.history);
+          if (gradient)
+            return run_model<1>(m, grp.block, nullptr, x, gradient, nullptr, false, grp.history);
+          return run_model<0>(m, grp.block, nullptr, x, nullptr, nullptr, false, grp.history);
         },
         grp.material);
   }

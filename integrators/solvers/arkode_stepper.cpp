@@ -72,6 +72,7 @@ struct Data {
   void* mem = nullptr;             // the stepper, for its step size and stage data
   NewtonResult interval;           // Newton work of the current output interval
   std::vector<ArkodeInternalStep>* history = nullptr;
+  double target = 0;  // end of the output interval being integrated [s]
   std::string error, stage_failure;
 
   // Positions of the state's x part with the Dirichlet conditions at t, the modules at t.
@@ -211,11 +212,18 @@ int free_stage_solver(SUNNonlinearSolver nls) {
   return SUN_NLS_SUCCESS;
 }
 
-int record_step(realtype t, N_Vector, void* user) {
+// After every accepted internal step: its time and size go to the step-size history, and, up to
+// the output time, the modules' internal variables (a viscoelastic history) move to it, so that
+// the next stages relax from there. A step past the output time (ARK_NORMAL steps past it and
+// interpolates) is left to the step's completion at the output time, which must not lie behind
+// the history.
+int internal_step_done(realtype t, N_Vector y_vec, void* user) {
   auto& d = *static_cast<Data*>(user);
   realtype h = 0;
   if (d.implicit.inertia ? ARKStepGetLastStep(d.mem, &h) : ERKStepGetLastStep(d.mem, &h)) return -1;
   d.history->push_back({t, h});
+  if (t > d.target) return 0;
+  d.lifecycle.system().complete_step(d.positions(view(y_vec).head(3 * d.nodes), t));
   return 0;
 }
 
@@ -316,7 +324,7 @@ void ArkodeStepper::run(Points& x, Points& v) {
   check(api.set_order(mem.get(), o.order), "SetOrder");
   check(api.set_max_steps(mem.get(), o.max_steps), "SetMaxNumSteps");
   check(api.set_stop_time(mem.get(), options_.duration), "SetStopTime");
-  check(api.set_postprocess(mem.get(), record_step), "SetPostprocessStepFn");
+  check(api.set_postprocess(mem.get(), internal_step_done), "SetPostprocessStepFn");
   if (o.fixed_step) check(api.set_fixed_step(mem.get(), options_.time_step), "SetFixedStep");
 
   const Index steps = time_step_count(options_);
@@ -326,6 +334,7 @@ void ArkodeStepper::run(Points& x, Points& v) {
     const double target = step_end_time(options_, k);
     lifecycle_.begin(x, t_start / options_.duration);
     data.interval = NewtonResult();
+    data.target = target;
     realtype t = 0;
     const int flag = api.evolve(mem.get(), target, y.get(), &t, ARK_NORMAL);
     if (flag < 0) {

@@ -32,6 +32,7 @@ void StepLifecycle::complete(double load, const NewtonResult& newton, const Poin
   for (const Tether* tether : terms_.excluded) step.energy -= tether->evaluate(x, nullptr, nullptr);
   if (v && terms_.mass) step.kinetic_energy = terms_.mass->quadratic_form(*v);
   step.reactions = constraints_.reactions(last_gradient_);
+  system_.complete_step(x);
   system_.report(x, step);
   step.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   timing_ = false;

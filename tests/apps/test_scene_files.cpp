@@ -201,6 +201,41 @@ TEST_F(SceneFileTest, MooneyRivlinTakesYoungsModulusAndPoissonsRatio) {
             std::string::npos);
 }
 
+TEST_F(SceneFileTest, ViscoelasticMaterialsTakeAPronySeries) {
+  const auto ve = [](const std::string& section) {
+    return std::vector<Override>{parse_override("bodies.0.material.viscoelastic=" + section)};
+  };
+  const Scene s = load_scene(
+      write(kValid),
+      ve(R"({"relaxation_times": [0.1, 2], "weights": [0.3, 0.2], "static_modulus": "instantaneous"})"));
+  const PronySeries& p = s.groups.at(0).viscoelastic;
+  EXPECT_EQ(p.times, (std::vector<double>{0.1, 2}));
+  EXPECT_EQ(p.weights, (std::vector<double>{0.3, 0.2}));
+  EXPECT_FALSE(p.static_relaxed);
+  EXPECT_EQ(s.elasticity.duration, 0.0);  // static: no time
+  EXPECT_TRUE(load_scene(write(kValid), ve(R"({"relaxation_times": [1], "weights": [0.5]})"))
+                  .groups.at(0)
+                  .viscoelastic.static_relaxed);
+  // Each bad section with the start of its one-line error.
+  const std::pair<const char*, const char*> bad[] = {
+      {R"({"relaxation_times": [0.1, -1], "weights": [0.2, 0.3]})",
+       "relaxation_times[1]: is -1 s; each relaxation time must be > 0"},
+      {R"({"relaxation_times": [0.1], "weights": [0]})",
+       "weights[0]: is 0; each weight must be > 0"},
+      {R"({"relaxation_times": [0.1, 1], "weights": [0.7, 0.4]})",
+       "weights: they sum to 1.1; they must sum to less than 1"},
+      {R"({"relaxation_times": [0.1], "weights": [0.2, 0.1]})",
+       "weights: 2 weights for 1 relaxation times"},
+      {R"({"relaxation_times": [], "weights": []})",
+       "relaxation_times: expected a non-empty array of numbers"},
+      {R"({"relaxation_times": [1], "weights": [0.5], "tau": 1})", "tau"}};
+  for (const auto& [section, message] : bad)
+    EXPECT_NE(
+        error(kValid, ve(section)).find("bodies[0].material.viscoelastic." + std::string(message)),
+        std::string::npos)
+        << section;
+}
+
 TEST_F(SceneFileTest, OverridesReachNestedKeys) {
   const Scene s = load_scene(write(kValid), {parse_override("bodies.0.mesh.cells=[2,1,1]"),
                                              parse_override("solver.linear_solver=gmres")});

@@ -10,6 +10,7 @@
 #include "finite_differences.hpp"
 #include "materials/closed_forms.hpp"
 #include "materials/material.hpp"
+#include "materials/random_state.hpp"
 
 namespace depthfem {
 namespace {
@@ -37,22 +38,7 @@ FiberReinforced<Veronda> fiber_veronda() {
   return {veronda(), 2e3, 3.0};
 }
 
-// Random F = I + 0.35 * noise with det F >= 0.3, and a random unit fiber direction.
-struct RandomState {
-  std::mt19937 rng{12345};
-  Mat3 F() {
-    std::uniform_real_distribution<double> u(-1, 1);
-    for (;;) {
-      Mat3 F = Mat3::Identity();
-      for (int i = 0; i < 9; ++i) F(i) += 0.35 * u(rng);
-      if (F.determinant() >= 0.3) return F;
-    }
-  }
-  Vec3 fiber() {
-    std::normal_distribution<double> n;
-    return Vec3(n(rng), n(rng), n(rng)).normalized();
-  }
-};
+using testing::RandomState;
 
 template <class M>
 class MaterialTest : public ::testing::Test {};
