@@ -242,6 +242,18 @@ std::vector<Index> JsonObject::indices(const std::string& key) {
   return out;
 }
 
+std::vector<double> JsonObject::numbers(const std::string& key) {
+  const nlohmann::json& v = at(key);
+  if (!v.is_array() || v.empty()) fail(key, "expected a non-empty array of numbers");
+  std::vector<double> out;
+  for (const auto& e : v) {
+    if (!e.is_number() || !std::isfinite(e.get<double>()))
+      fail(key, "expected an array of finite numbers, found " + shown(e));
+    out.push_back(e.get<double>());
+  }
+  return out;
+}
+
 std::vector<std::string> JsonObject::strings(const std::string& key) {
   const nlohmann::json& v = at(key);
   if (!v.is_array() || v.empty()) fail(key, "expected a non-empty array of strings");

@@ -48,6 +48,8 @@ class JsonObject {
   Eigen::Vector3i int3(const std::string& key);
   /// An array of node indices, each in [0, 2^31).
   std::vector<Index> indices(const std::string& key);
+  /// A non-empty array of finite numbers.
+  std::vector<double> numbers(const std::string& key);
   /// A non-empty array of strings.
   std::vector<std::string> strings(const std::string& key);
   JsonObject object(const std::string& key);

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <memory>
 #include <new>
+#include <optional>
 #include <utility>
 
 #include "apps/scene_model.hpp"
@@ -39,6 +40,9 @@ ResultFields result_fields(const Scene& scene) {
   fields.velocity = scene.analysis != Analysis::kStatic;
   fields.contact =
       fields.contact && (scene.contact == ContactModel::kMaterialDepth || !scene.obstacles.empty());
+  fields.viscous = fields.velocity && std::ranges::any_of(scene.groups, [](const ElasticGroup& g) {
+                     return !g.viscoelastic.empty();
+                   });
   return fields;
 }
 
@@ -134,7 +138,11 @@ void drive(const Scene& scene, SceneModel& model, StepLifecycle& lifecycle, doub
       switch (dyn.integrator) {
         case Integrator::kImplicitEuler:
         case Integrator::kNewmark:
+        case Integrator::kGeneralizedAlpha:
           ImplicitStepper(lifecycle, model.implicit, dyn).run(result.x, v);
+          break;
+        case Integrator::kArkodeDirk:
+          ArkodeStepper(lifecycle, model.lumped_mass, dyn, model.implicit).run(result.x, v);
           break;
         case Integrator::kSymplecticEuler:
           SymplecticEuler(
@@ -250,25 +258,44 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
       << to_string(model->static_options.newton.linear.kind) << ", Newton tolerance "
       << format("%.3g", scene.tolerance) << " x E h^2 per dof" << std::endl;
 
-  // Drive: every completed step is written, then printed (so a printed step is on disk) and kept.
+  // Writes a completed step into the results file.
+  const auto write = [&](const StepRecord& step, const Points& x, const Points* v) {
+    ElementFields elements;
+    if (fields.stress || fields.strain) {
+      PhaseTimers::Scope t(result.timers, "output: element fields");
+      const VectorX pressure =
+          model->nodal_volume ? model->nodal_volume->nodal_pressures(x) : VectorX();
+      elements = element_fields(mesh.X, mesh.tets, scene.groups, x, {fields.stress, fields.strain},
+                                &pressure);
+    }
+    if (fields.viscous) {
+      PhaseTimers::Scope t(result.timers, "output: element fields");
+      elements.viscous_stress = model->elasticity->viscous_stress(x);
+    }
+    PhaseTimers::Scope t(result.timers, "output: results file");
+    file->append_step(step, x, v, &elements);
+    file->write_timing(result.timers.phases());  // a run killed later keeps its timing so far
+  };
+  // The last completed step not written (output every N > 1 steps), written when the run ends.
+  struct Pending {
+    StepRecord step;
+    Points x, v;
+    bool has_v = false;
+  };
+  std::optional<Pending> pending;
+  // Drive: every N-th completed step is written (every one by default), then every step is
+  // printed (so a printed step of a run writing every step is on disk) and kept.
   const auto on_step = [&](const StepRecord& done, const Points& x, const Points* v) {
     StepRecord step = done;
     if (model->contact) {
       PhaseTimers::Scope t(result.timers, "output: penetration");
       step.penetration = deepest_penetration(mesh, x, model->contact->pairs());
     }
-    if (file) {
-      ElementFields elements;
-      if (fields.stress || fields.strain) {
-        PhaseTimers::Scope t(result.timers, "output: element fields");
-        const VectorX pressure =
-            model->nodal_volume ? model->nodal_volume->nodal_pressures(x) : VectorX();
-        elements = element_fields(mesh.X, mesh.tets, scene.groups, x,
-                                  {fields.stress, fields.strain}, &pressure);
-      }
-      PhaseTimers::Scope t(result.timers, "output: results file");
-      file->append_step(step, x, v, &elements);
-      file->write_timing(result.timers.phases());  // a run killed later keeps its timing so far
+    if (file && (step.index + 1) % scene.output_every == 0) {
+      write(step, x, v);
+      pending.reset();
+    } else if (file) {
+      pending = Pending{step, x, v ? *v : Points(), v != nullptr};
     }
     log << format("step %4d  %s %.4f%s  newton %2d  linear %5d  residual %.3e  energy % .6e",
                   int(step.index), v ? "time" : "load", step.load, step.settling ? " (settle)" : "",
@@ -282,6 +309,14 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   };
   StepLifecycle lifecycle(model->system, model->constraints, model->lifecycle_terms(), on_step);
   drive(scene, *model, lifecycle, start_load, result);
+  if (pending) {
+    try {
+      write(pending->step, pending->x, pending->has_v ? &pending->v : nullptr);
+    } catch (const InputError& e) {  // a full disk, a file-size limit
+      result.message += (result.message.empty() ? "" : "; then ") + std::string(e.what());
+      result.success = false;
+    }
+  }
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (file) finish_results(*file, result);
   return result;

@@ -139,8 +139,22 @@ LoadedMesh make_mesh(const MeshSpec& spec, const JsonObject& m) {
   }
 }
 
+// A material's "viscoelastic" section: a Prony series on its isochoric stress.
+PronySeries read_viscoelastic(JsonObject v) {
+  PronySeries p;
+  p.times = v.numbers("relaxation_times");
+  p.weights = v.numbers("weights");
+  p.static_relaxed = v.choice("static_modulus", "static modulus",
+                              {std::pair{"equilibrium", true}, std::pair{"instantaneous", false}});
+  if (const std::optional<PronySeries::Problem> problem = p.problem())
+    v.fail(problem->key, problem->why);
+  v.finish();
+  return p;
+}
+
 // Material parameters by model name; the keys are those of the model's struct.
-MaterialModel read_material(JsonObject m, Vec3& fiber_direction, VolumeFormulation& formulation) {
+MaterialModel read_material(JsonObject m, Vec3& fiber_direction, VolumeFormulation& formulation,
+                            PronySeries& viscoelastic) {
   const std::string model = m.string("model");
   // Every model has an isochoric part (materials/isochoric.hpp) and a small-strain bulk
   // modulus, so every model takes either formulation.
@@ -188,6 +202,13 @@ MaterialModel read_material(JsonObject m, Vec3& fiber_direction, VolumeFormulati
             "fiber_mooney_rivlin or fiber_veronda)");
   }
   if (material_uses_fiber(out)) fiber_direction = m.vec3("fiber_direction");
+  if (m.has("viscoelastic")) {
+    // Relaxation on nodal-pressure tets (isochoric part per tet, volume per node) is not
+    // verified by any test, so the combination is refused rather than run unchecked.
+    if (formulation != VolumeFormulation::kStandard)
+      m.fail("viscoelastic", "needs \"formulation\": \"standard\"");
+    viscoelastic = read_viscoelastic(m.object("viscoelastic"));
+  }
   try {
     validate_material(out);
   } catch (const std::invalid_argument& e) {
@@ -208,7 +229,8 @@ struct BodyMaterial {
   MaterialModel model;
   Vec3 fiber = Vec3::UnitX();
   VolumeFormulation formulation = VolumeFormulation::kStandard;
-  std::string path;  // the scene key, for messages
+  PronySeries viscoelastic;  // empty: elastic
+  std::string path;          // the scene key, for messages
 };
 
 // Reads "material" (one for the whole body) or "materials" ({region: material}); the region
@@ -218,7 +240,7 @@ std::vector<BodyMaterial> read_body_materials(JsonObject& b) {
   if (!b.has("materials")) {
     const JsonObject m = b.object("material");
     BodyMaterial& one = out.emplace_back();
-    one.model = read_material(m, one.fiber, one.formulation);
+    one.model = read_material(m, one.fiber, one.formulation, one.viscoelastic);
     one.path = m.path();
     return out;
   }
@@ -228,7 +250,7 @@ std::vector<BodyMaterial> read_body_materials(JsonObject& b) {
     const JsonObject m = ms.object(region);
     BodyMaterial& one = out.emplace_back();
     one.region = region;
-    one.model = read_material(m, one.fiber, one.formulation);
+    one.model = read_material(m, one.fiber, one.formulation, one.viscoelastic);
     one.path = m.path();
   }
   if (out.empty()) b.fail("materials", "names no region");
@@ -435,12 +457,15 @@ void read_dynamic(JsonObject d, Scene& scene) {
   o.integrator = d.choice<Integrator>("integrator", "integrator",
                                       {{"implicit_euler", Integrator::kImplicitEuler},
                                        {"newmark", Integrator::kNewmark},
+                                       {"generalized_alpha", Integrator::kGeneralizedAlpha},
                                        {"symplectic_euler", Integrator::kSymplecticEuler},
-                                       {"arkode", Integrator::kArkode}});
+                                       {"arkode", Integrator::kArkode},
+                                       {"arkode_dirk", Integrator::kArkodeDirk}});
   o.time_step = d.number("time_step");
   o.duration = d.number("duration");
   if (!(o.time_step > 0)) d.fail("time_step", "must be > 0");
   if (!(o.duration >= o.time_step)) d.fail("duration", "must be >= time_step");
+  scene.elasticity.duration = o.duration;  // viscoelastic groups: time = load * duration
   const double steps = std::ceil(o.duration / o.time_step - 1e-9);
   if (!(steps <= kMaxSteps)) {
     d.fail("time_step", "duration / time_step asks for " + number_text(steps) +
@@ -461,6 +486,8 @@ void read_dynamic(JsonObject d, Scene& scene) {
       {{"lumped", MassMatrix::kLumped}, {"consistent", MassMatrix::kConsistent}});
   if (o.mass == MassMatrix::kConsistent && explicit_scheme)
     d.fail("mass", "a consistent mass matrix needs an implicit integrator");
+  if (o.mass == MassMatrix::kConsistent && o.integrator == Integrator::kArkodeDirk)
+    d.fail("mass", "arkode_dirk takes the lumped mass matrix");
   if (std::optional<JsonObject> section =
           integrator_section(d, "newmark", o.integrator == Integrator::kNewmark)) {
     JsonObject& n = *section;
@@ -469,6 +496,14 @@ void read_dynamic(JsonObject d, Scene& scene) {
     if (!(o.newmark.beta > 0 && o.newmark.beta <= 0.5)) n.fail("beta", "must be in (0, 0.5]");
     if (!(o.newmark.gamma >= 0.5 && o.newmark.gamma <= 1)) n.fail("gamma", "must be in [0.5, 1]");
     n.finish();
+  }
+  if (std::optional<JsonObject> section = integrator_section(
+          d, "generalized_alpha", o.integrator == Integrator::kGeneralizedAlpha)) {
+    JsonObject& g = *section;
+    o.generalized_alpha.rho_inf = g.number("rho_inf", o.generalized_alpha.rho_inf);
+    if (!(o.generalized_alpha.rho_inf >= 0 && o.generalized_alpha.rho_inf <= 1))
+      g.fail("rho_inf", "must be in [0, 1]");
+    g.finish();
   }
   if (d.has("damping")) {
     JsonObject c = d.object("damping");
@@ -480,14 +515,19 @@ void read_dynamic(JsonObject d, Scene& scene) {
       c.fail("stiffness", "needs an implicit integrator");
     c.finish();
   }
-  if (std::optional<JsonObject> section =
-          integrator_section(d, "arkode", o.integrator == Integrator::kArkode)) {
+  if (std::optional<JsonObject> section = integrator_section(
+          d, "arkode",
+          o.integrator == Integrator::kArkode || o.integrator == Integrator::kArkodeDirk)) {
     JsonObject& a = *section;
     o.arkode.order = a.integer("order", o.arkode.order);
     o.arkode.relative_tolerance = a.number("relative_tolerance", o.arkode.relative_tolerance);
     o.arkode.absolute_tolerance = a.number("absolute_tolerance", o.arkode.absolute_tolerance);
     o.arkode.max_steps = a.integer("max_steps", static_cast<int>(o.arkode.max_steps));
-    if (!has_erk_table(o.arkode.order)) a.fail("order", "must be 2, 3, 4, 5, 6 or 8");
+    o.arkode.fixed_step = a.boolean("fixed_step", o.arkode.fixed_step);
+    if (o.integrator == Integrator::kArkode && !has_erk_table(o.arkode.order))
+      a.fail("order", "must be 2, 3, 4, 5, 6 or 8");
+    if (o.integrator == Integrator::kArkodeDirk && !has_dirk_table(o.arkode.order))
+      a.fail("order", "must be 2, 3, 4 or 5 for arkode_dirk");
     if (!(o.arkode.relative_tolerance > 0)) a.fail("relative_tolerance", "must be > 0");
     if (!(o.arkode.absolute_tolerance > 0)) a.fail("absolute_tolerance", "must be > 0");
     if (!(o.arkode.max_steps > 0)) a.fail("max_steps", "must be > 0");
@@ -736,6 +776,8 @@ std::vector<ConstraintSpec> read_sections(JsonObject& r, Scene& scene) {
     scene.output.stress = o.boolean("stress", false);
     scene.output.strain = o.boolean("strain", false);
     scene.output.contact = o.boolean("contact", true);
+    scene.output_every = o.integer("every", 1);
+    if (scene.output_every < 1) o.fail("every", "must be >= 1");
     o.finish();
   }
   if (r.has("dynamic")) {
@@ -790,8 +832,11 @@ void add_body(const BodySpec& b, Scene& scene, std::vector<std::string>& materia
         const auto it = std::ranges::find(body.regions, m.region, &Region::name);
         tets = it != body.regions.end() ? *it : Region{};
       }
-      ElasticGroup g{
-          .material = m.model, .tets = {}, .fibers = Points(), .formulation = m.formulation};
+      ElasticGroup g{.material = m.model,
+                     .tets = {},
+                     .fibers = Points(),
+                     .formulation = m.formulation,
+                     .viscoelastic = m.viscoelastic};
       for (Index t = 0; t < tets.num_tets; ++t) g.tets.push_back(tets.first_tet + t);
       if (material_uses_fiber(g.material))
         g.fibers = m.fiber.transpose().replicate(static_cast<Index>(g.tets.size()), 1);

@@ -57,6 +57,8 @@ struct Scene {
   /// contact fields where the scene has material-depth or obstacle contact; `velocity` is not a
   /// key (time-dependent analyses write velocities).
   ResultFields output{.contact = true};
+  /// The "output" key `every`: the results file takes every N-th completed step and the last.
+  int output_every = 1;
 };
 
 /// A `--set path=value` override: path segments separated by '.', array indices as numbers,

@@ -38,9 +38,7 @@ std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers)
   }
   // Time-dependent analyses: the implicit schemes carry inertia and damping as tethers.
   const DynamicOptions& dyn = scene.dynamic_options;
-  const bool implicit_scheme =
-      dyn.integrator == Integrator::kImplicitEuler || dyn.integrator == Integrator::kNewmark;
-  if (time_dependent && implicit_scheme) {
+  if (time_dependent && is_implicit(dyn.integrator)) {
     ImplicitTerms& terms = model->implicit;
     // Inertia and mass damping with the lumped or the consistent mass matrix.
     const auto mass_tether = [&](const char* name, double factor) -> Tether* {

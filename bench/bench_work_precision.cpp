@@ -1,7 +1,7 @@
 // Work-precision study on falling_bars: every time integrator at a ladder of step sizes (or
-// tolerances for ARKODE); error = largest distance, over the output times (every 10 ms) and the
-// tip nodes of the three bars, from a reference run of ARKODE's 8th-order method at a relative
-// tolerance of 1e-11; work = wall time of the run.
+// tolerances for ARKODE's explicit and diagonally implicit methods); error = largest distance, over
+// the output times (every 10 ms) and the tip nodes of the three bars, from a reference run of
+// ARKODE's 8th-order method at a relative tolerance of 1e-11; work = wall time of the run.
 //
 //   build/bench/bench_work_precision [--out bench/results/work_precision.csv] [--duration 2.0]
 //                                    [--set PATH=VALUE ...]
@@ -32,7 +32,8 @@ struct Trajectory {
   std::vector<Points> tips;  // tip positions at t = k * kSampleInterval, k = 1, 2, ...
   double seconds = 0;
   long steps = 0;   // time steps, or ARKODE's internal steps
-  long newton = 0;  // Newton iterations (implicit schemes)
+  long newton = 0;  // Newton iterations (implicit schemes; DIRK: over all stages)
+  long linear_solves = 0, factorizations = 0;
   std::string failure;
 };
 
@@ -45,11 +46,14 @@ Trajectory run_case(const std::string& scene_path, std::vector<Override> o,
     if (std::abs(scene.mesh.X(i, 0) - 1.0) < 1e-9) tip.push_back(i);
   Trajectory t;
   const bool explicit_rk = scene.dynamic_options.integrator == Integrator::kArkode;
+  const bool dirk = scene.dynamic_options.integrator == Integrator::kArkodeDirk;
   RunOptions options;
   options.threads = 1;
   options.observer = [&](const StepRecord& s, const Points& x) {
-    t.steps += explicit_rk ? s.newton_iterations : 1;
+    t.steps += explicit_rk ? s.newton_iterations : dirk ? 0 : 1;
     if (!explicit_rk) t.newton += s.newton_iterations;
+    t.linear_solves += s.linear_solves;
+    t.factorizations += s.factorizations;
     const double k = s.load / kSampleInterval;
     if (std::abs(k - std::round(k)) > 1e-6) return;
     Points p(static_cast<Index>(tip.size()), 3);
@@ -114,6 +118,12 @@ int main(int argc, char** argv) {
     return std::vector<std::string>{span, std::string("dynamic.integrator=") + integrator,
                                     "dynamic.time_step=" + number(h)};
   };
+  // ARKStep's diagonally implicit table of `order`, error-controlled at rtol (atol rtol / 100).
+  const auto dirk = [&](int order, double rtol) {
+    std::vector<std::string> o = arkode(order, rtol);
+    o[2] = "dynamic.integrator=arkode_dirk";
+    return o;
+  };
 
   std::cout << "reference: ARKODE order 8, relative tolerance 1e-11 ..." << std::endl;
   const Trajectory ref = run_case(scene, scene_overrides, arkode(8, 1e-11));
@@ -126,12 +136,14 @@ int main(int argc, char** argv) {
     std::cerr << "bench_work_precision: cannot write " << out << "\n";
     return 1;
   }
-  csv << "integrator,setting,value,steps,newton_iterations,wall_s,max_tip_error_m,status\n";
+  csv << "integrator,setting,value,steps,newton_iterations,linear_solves,factorizations,wall_s,"
+         "max_tip_error_m,status\n";
   const auto row = [&](const std::string& name, const std::string& setting, double value,
                        const Trajectory& t) {
     const double err = max_distance(t, ref);
     csv << name << "," << setting << "," << value << "," << t.steps << "," << t.newton << ","
-        << t.seconds << "," << err << "," << (t.failure.empty() ? "ok" : "failed") << "\n";
+        << t.linear_solves << "," << t.factorizations << "," << t.seconds << "," << err << ","
+        << (t.failure.empty() ? "ok" : "failed") << "\n";
     csv.flush();
     std::printf("%-18s %-9s %-9g steps %7ld  newton %6ld  %8.3f s  error %.3e m %s\n", name.c_str(),
                 setting.c_str(), value, t.steps, t.newton, t.seconds, err, t.failure.c_str());
@@ -140,7 +152,15 @@ int main(int argc, char** argv) {
   for (double h : {0.01, 0.005, 0.0025, 0.00125, 0.000625}) {
     row("implicit_euler", "h", h, run_case(scene, scene_overrides, stepped("implicit_euler", h)));
     row("newmark", "h", h, run_case(scene, scene_overrides, stepped("newmark", h)));
+    std::vector<std::string> alpha = stepped("generalized_alpha", h);
+    alpha.push_back(R"(dynamic.generalized_alpha={"rho_inf": 0.8})");
+    row("generalized_alpha", "h", h, run_case(scene, scene_overrides, alpha));
   }
+  for (int order : {2, 3, 4})
+    for (double rtol : {1e-2, 1e-3, 1e-4, 1e-5, 1e-6})
+      if (order > 2 || rtol >= 1e-4)  // second order: its order-1 embedding asks ~10x the steps
+        row("arkode_dirk" + std::to_string(order), "rtol", rtol,
+            run_case(scene, scene_overrides, dirk(order, rtol)));
   // Symplectic Euler from just below its stable step (rounded to divide the sample interval).
   const Scene base = load_scene(scene, scene_overrides);
   const double limit =

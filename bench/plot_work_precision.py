@@ -21,6 +21,10 @@ STYLE = {  # integrator -> (colour, marker)
     "arkode_order2": ("tab:blue", "v"),
     "arkode_order4": ("tab:purple", "D"),
     "arkode_order8": ("tab:brown", "P"),
+    "generalized_alpha": ("tab:pink", "X"),
+    "arkode_dirk2": ("tab:cyan", "<"),
+    "arkode_dirk3": ("tab:olive", ">"),
+    "arkode_dirk4": ("tab:gray", "h"),
 }
 
 

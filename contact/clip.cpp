@@ -104,6 +104,17 @@ void start_with_triangle(const std::array<Vec3, 3>& Q, Labelled* p) {
 }  // namespace
 
 ClipPolygon clip_triangle_by_tet(const std::array<Vec3, 4>& P, const std::array<Vec3, 3>& Q) {
+  // A tet strictly on one side of the triangle's plane does not meet it: four dot products
+  // reject most pairs whose boxes overlap (a surface triangle beside the tets under it) before
+  // any clipping.
+  const Vec3 m = (Q[1] - Q[0]).cross(Q[2] - Q[0]);
+  int above = 0, below = 0;
+  for (const Vec3& p : P) {
+    const double s = m.dot(p - Q[0]);
+    above += s > 0;
+    below += s < 0;
+  }
+  if (above == 4 || below == 4) return ClipPolygon{};
   Labelled a[8], b[8];
   start_with_triangle(Q, a);
   int n = 3;
@@ -115,7 +126,8 @@ ClipPolygon clip_triangle_by_tet(const std::array<Vec3, 4>& P, const std::array<
     const Vec3 normal = (P[kTetFace[f][1]] - Pi).cross(P[kTetFace[f][2]] - Pi);
     double d[8];
     for (int i = 0; i < n; ++i) d[i] = normal.dot(Pi - cur[i].x);
-    snap_to_zero(d, n, kSnap * std::pow(normal.norm(), 1.5));
+    const double length = normal.norm();
+    snap_to_zero(d, n, kSnap * length * std::sqrt(length));
     if (std::all_of(d, d + n, [](double v) { return v == 0; })) {
       // The polygon lies in the face plane. The face is shared by two tets (or is on the
       // boundary, where the depth is zero): count it for exactly one of them, so that a

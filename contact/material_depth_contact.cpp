@@ -44,11 +44,25 @@ MaterialDepthContact::MaterialDepthContact(const Mesh& mesh, VectorX depth, Cont
       tri_body_(mesh.tri_body),
       depth_(std::move(depth)),
       options_(options),
+      bodies_(mesh.bodies),
       interfaces_(mesh.bodies, options.self_contact) {
   // Sub-triangles with area below 1e-12 of a typical element face count as degenerate.
   const double h = mean_edge_length(mesh.X, mesh.tets);
   min_area2_ = std::pow(1e-12 * h * h, 2);
-  tree_ = AabbTree(tet_boxes(mesh.X, tets_));
+  build_trees(mesh.X);
+}
+
+void MaterialDepthContact::build_trees(const Points& x) {
+  const std::vector<Box3> boxes = tet_boxes(x, tets_);
+  trees_.clear();
+  for (const Body& b : bodies_)
+    trees_.emplace_back(
+        std::vector<Box3>(boxes.begin() + b.first_tet, boxes.begin() + b.first_tet + b.num_tets));
+}
+
+bool MaterialDepthContact::searched(Index a, Index b) const {
+  if (bodies_[a].rigid && bodies_[b].rigid) return false;
+  return a != b || options_.self_contact;
 }
 
 std::array<Index, 7> MaterialDepthContact::pair_nodes(const ContactPair& p) const {
@@ -57,11 +71,14 @@ std::array<Index, 7> MaterialDepthContact::pair_nodes(const ContactPair& p) cons
 }
 
 void MaterialDepthContact::begin_step(const Points& x) {
-  tree_ = AabbTree(tet_boxes(x, tets_));
+  build_trees(x);
 }
 
 void MaterialDepthContact::prepare(const Points& x) {
-  tree_.refit(tet_boxes(x, tets_));
+  const std::vector<Box3> boxes = tet_boxes(x, tets_);
+  for (size_t b = 0; b < bodies_.size(); ++b)
+    trees_[b].refit(std::vector<Box3>(boxes.begin() + bodies_[b].first_tet,
+                                      boxes.begin() + bodies_[b].first_tet + bodies_[b].num_tets));
   const Index n = static_cast<Index>(tris_.rows());
   const Index chunks = (n + kChunk - 1) / kChunk;
   std::vector<std::vector<ContactPair>> found(static_cast<size_t>(chunks));
@@ -71,17 +88,20 @@ void MaterialDepthContact::prepare(const Points& x) {
       const std::array<Vec3, 3> Q = tri_corners(x, tris_, f);
       Box3 box;
       for (const Vec3& q : Q) box.extend(q);
-      tree_.query(box, [&](Index t) {
-        if (tet_body_(t) == tri_body_(f)) {
-          if (!options_.self_contact) return;
-          for (int a = 0; a < 4; ++a)
-            for (int b = 0; b < 3; ++b)
-              if (tets_(t, a) == tris_(f, b)) return;  // shares a node: never in contact
-        }
-        ++candidates[c];
-        ClipPolygon poly = clip_triangle_by_tet(tet_corners(x, tets_, t), Q);
-        if (poly.size >= 3 && has_area(poly, min_area2_)) found[c].push_back({f, t, poly});
-      });
+      const Index body = tri_body_(f);
+      for (Index other = 0; other < static_cast<Index>(bodies_.size()); ++other) {
+        if (!searched(body, other)) continue;
+        trees_[other].query(box, [&](Index local) {
+          const Index t = bodies_[other].first_tet + local;
+          if (other == body)
+            for (int a = 0; a < 4; ++a)
+              for (int b = 0; b < 3; ++b)
+                if (tets_(t, a) == tris_(f, b)) return;  // shares a node: never in contact
+          ++candidates[c];
+          ClipPolygon poly = clip_triangle_by_tet(tet_corners(x, tets_, t), Q);
+          if (poly.size >= 3 && has_area(poly, min_area2_)) found[c].push_back({f, t, poly});
+        });
+      }
     }
   });
   std::vector<ContactPair> all;
@@ -111,10 +131,7 @@ void MaterialDepthContact::prepare(const Points& x) {
 }
 
 void MaterialDepthContact::add_couplings(SparsityBuilder& builder) const {
-  for (const ContactPair& p : pairs_) {
-    const std::array<Index, 7> v = pair_nodes(p);
-    builder.add_clique(v);
-  }
+  schedule_.add_couplings(builder);
 }
 
 void MaterialDepthContact::bind(const BlockSparseMatrix& hessian) {

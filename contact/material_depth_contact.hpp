@@ -1,7 +1,9 @@
 #pragma once
 /// Frictionless penalty contact with the material-depth gap (paper section 5): every boundary
 /// triangle against every tet of another body (and of its own body, for self-contact), the
-/// penalty eps/2 g^2 integrated exactly over their intersection polygon.
+/// penalty eps/2 g^2 integrated exactly over their intersection polygon. Pairs of two rigid
+/// bodies (a body against itself included) are not searched: all their nodes are prescribed, so
+/// they exert no force on an unknown.
 
 #include <vector>
 
@@ -80,7 +82,13 @@ class MaterialDepthContact final : public ForceModule {
   VectorX depth_;
   ContactOptions options_;
   double min_area2_ = 0;
-  AabbTree tree_;
+  /// Builds trees_ over the tets of each body at positions x.
+  void build_trees(const Points& x);
+  /// Whether triangles of body a are searched against tets of body b.
+  bool searched(Index a, Index b) const;
+
+  std::vector<Body> bodies_;
+  std::vector<AabbTree> trees_;  // per body over its tets (primitive k: tet first_tet + k)
   std::vector<ContactPair> pairs_;
   PairSchedule schedule_;  // of pairs_: tet corners, triangle corners
   ContactStats stats_;

@@ -97,11 +97,7 @@ void NodeToSurfaceContact::prepare(const Points& x) {
 }
 
 void NodeToSurfaceContact::add_couplings(SparsityBuilder& builder) const {
-  for (Index k = 0; k < schedule_.size(); ++k) {
-    const Index v[4] = {schedule_.node(k, 0), schedule_.node(k, 1), schedule_.node(k, 2),
-                        schedule_.node(k, 3)};
-    builder.add_clique(v);
-  }
+  schedule_.add_couplings(builder);
 }
 
 void NodeToSurfaceContact::bind(const BlockSparseMatrix& hessian) {

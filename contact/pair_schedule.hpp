@@ -21,9 +21,16 @@ class PairSchedule {
 
   /// Orders the pairs given by their nodes (#pairs x K) and centres (#pairs x 3) and returns, for
   /// each position, the index of the pair placed there. With a bound pattern, finds the pairs'
-  /// blocks in it (has_blocks() tells whether all were there).
+  /// blocks in it (has_blocks() tells whether all were there); when some are missing, the pairs
+  /// join the kept cliques that add_couplings() puts in the next pattern.
   std::vector<Index> arrange(const Nodes& nodes, const Points& centres, Index num_nodes,
                              const BlockSparseMatrix* bound);
+  /// Couples the nodes of the current pairs and of the kept ones: a pattern with room for the
+  /// pairs that come and go between Newton iterations, so that it (and the direct solver's
+  /// analysis) changes only when a pair never seen since the last change appears. The kept set
+  /// is the union of the pair sets that needed a new pattern, started afresh from the current
+  /// pairs when it has grown to more than twice their number.
+  void add_couplings(SparsityBuilder& builder) const;
   /// Finds the pairs' blocks in `hessian`; throws std::logic_error naming `module` if the pattern
   /// lacks one (it was built from the module's couplings).
   void bind(const BlockSparseMatrix& hessian, const std::string& module);
@@ -54,6 +61,7 @@ class PairSchedule {
 
  private:
   Nodes nodes_;
+  Nodes kept_;  // rows: the cliques add_couplings() adds, sorted, without repeats
   std::vector<Index> chunk_begin_, color_begin_;
   std::vector<Index> blocks_;  // K K per pair; empty while some are missing
 };

@@ -120,16 +120,20 @@ Eigen::SparseMatrix<double> BlockSparseMatrix::to_sparse() const {
 
 // Row 3i+c holds, for every block k = (i, j) of block row i, the entries (3i+c, 3j+d) =
 // values[9k + 3c + d]; the upper triangle keeps j > i, and d >= c in the diagonal block.
-ScalarPattern BlockSparseMatrix::scalar_pattern(Triangle triangle) const {
+ScalarPattern BlockSparseMatrix::scalar_pattern(Triangle triangle,
+                                                std::vector<char> decoupled) const {
   const bool upper = triangle == Triangle::kUpper;
   ScalarPattern p;
   p.triangle = triangle;
+  p.decoupled = std::move(decoupled);
   p.row_begin.assign(3 * static_cast<size_t>(num_nodes()) + 1, 0);
   for (Index i = 0; i < num_nodes(); ++i)
     for (int c = 0; c < 3; ++c) {
       Index n = 0;
       for (Index k = row_begin_[i]; k < row_begin_[i + 1]; ++k)
-        if (!upper || col_[k] > i)
+        if (!p.keeps(i, col_[k]))
+          continue;
+        else if (!upper || col_[k] > i)
           n += 3;
         else if (col_[k] == i)
           n += 3 - c;
@@ -141,7 +145,7 @@ ScalarPattern BlockSparseMatrix::scalar_pattern(Triangle triangle) const {
       Index q = p.row_begin[3 * i + c];
       for (Index k = row_begin_[i]; k < row_begin_[i + 1]; ++k) {
         const Index j = col_[k];
-        if (upper && j < i) continue;
+        if ((upper && j < i) || !p.keeps(i, j)) continue;
         for (int d = upper && j == i ? c : 0; d < 3; ++d) p.col[q++] = 3 * j + d;
       }
     }
@@ -157,7 +161,7 @@ void BlockSparseMatrix::scalar_values(const ScalarPattern& pattern, double* out)
                           double* o = out + pattern.row_begin[3 * i + c];
                           for (Index k = row_begin_[i]; k < row_begin_[i + 1]; ++k) {
                             const Index j = col_[k];
-                            if (upper && j < i) continue;
+                            if ((upper && j < i) || !pattern.keeps(i, j)) continue;
                             const double* v = values_.data() + 9 * static_cast<size_t>(k) + 3 * c;
                             for (int d = upper && j == i ? c : 0; d < 3; ++d) *o++ = v[d];
                           }

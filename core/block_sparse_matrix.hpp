@@ -43,6 +43,13 @@ struct ScalarPattern {
   Triangle triangle = Triangle::kFull;
   std::vector<Index> row_begin;  ///< 3 #nodes + 1 offsets into col
   std::vector<Index> col;        ///< column of every entry
+  /// Per node (or empty: none): 1 where the node's off-diagonal blocks are left out, since the
+  /// matrix holds them zero (a fully prescribed node after Constraints::project).
+  std::vector<char> decoupled;
+  /// Whether block (i, j) of the block pattern is part of this one.
+  bool keeps(Index i, Index j) const {
+    return i == j || decoupled.empty() || !(decoupled[size_t(i)] || decoupled[size_t(j)]);
+  }
 };
 
 /// Global stiffness matrix over interleaved degrees of freedom (dof 3 * node + component),
@@ -105,8 +112,9 @@ class BlockSparseMatrix {
   VectorX diagonal() const;
   /// The same matrix as an Eigen compressed sparse matrix (a reference for tests).
   Eigen::SparseMatrix<double> to_sparse() const;
-  /// The scalar pattern of the whole matrix or of its upper triangle.
-  ScalarPattern scalar_pattern(Triangle triangle) const;
+  /// The scalar pattern of the whole matrix or of its upper triangle, without the off-diagonal
+  /// blocks of the `decoupled` nodes (ScalarPattern::decoupled).
+  ScalarPattern scalar_pattern(Triangle triangle, std::vector<char> decoupled = {}) const;
   /// Writes the values in the order of `pattern` (from scalar_pattern() of this pattern) to
   /// out[0, pattern.col.size()); TBB-parallel over block rows.
   void scalar_values(const ScalarPattern& pattern, double* out) const;

@@ -16,7 +16,8 @@ namespace depthfem {
 /// vectors of 3 * #nodes entries, interleaved (dof 3 * node + component).
 ///
 /// The step lifecycle calls, per step: begin_step and set_load once; then prepare before every
-/// evaluation at a new configuration; then prepare, evaluate and report at the converged state.
+/// evaluation at a new configuration; then prepare, evaluate, complete_step and report at the
+/// converged state.
 class ForceModule {
  public:
   virtual ~ForceModule() = default;
@@ -56,6 +57,11 @@ class ForceModule {
   virtual double max_step(const Points& /*x*/, const Points& /*dx*/) const {
     return std::numeric_limits<double>::infinity();
   }
+
+  /// Once per accepted step (load increment or time step) at its converged x, after its energy
+  /// and gradient there and before report(): a module with internal variables (the viscoelastic
+  /// history) writes them. A rejected attempt never gets here, so it leaves them untouched.
+  virtual void complete_step(const Points& /*x*/) {}
 
   /// Adds what this module knows about the converged state x (after prepare(x)) to the step's
   /// record: contact modules append one row per interface, in a fixed order.

@@ -220,6 +220,8 @@ std::vector<StepValue> step_values(const StepRecord& step, bool velocity,
                              {"settling", {double(step.settling)}},
                              {"newton_iterations", {double(step.newton_iterations)}},
                              {"linear_iterations", {double(step.linear_iterations)}},
+                             {"linear_solves", {double(step.linear_solves)}},
+                             {"factorizations", {double(step.factorizations)}},
                              {"residual", {step.residuals.empty() ? 0.0 : step.residuals.back()}},
                              {"energy", {step.energy}}};
   if (velocity) out.push_back({"kinetic_energy", {step.kinetic_energy}});
@@ -229,6 +231,7 @@ std::vector<StepValue> step_values(const StepRecord& step, bool velocity,
   }
   if (!step.contact.empty()) out.push_back({"contact_area", {step.contact_area()}});
   if (step.penetration) out.push_back({"penetration", {*step.penetration}});
+  if (step.dissipated_energy) out.push_back({"dissipated_energy", {*step.dissipated_energy}});
   for (const InterfaceForce& c : step.contact) {
     out.push_back({"contact_force " + c.name, {c.force(0), c.force(1), c.force(2)}});
     out.push_back({"contact_force_magnitude " + c.name, {c.magnitude}});
@@ -364,6 +367,8 @@ struct ResultsFile::State {
                                  {"settling", i32, {}},
                                  {"newton_iterations", i32, {}},
                                  {"linear_iterations", i32, {}},
+                                 {"linear_solves", i32, {}},
+                                 {"factorizations", i32, {}},
                                  {"energy", f64, {}},
                                  {"seconds", f64, {}},
                                  {"residual_count", i32, {}},
@@ -389,6 +394,10 @@ struct ResultsFile::State {
     if (f.strain) {
       out.push_back({"strain", f64, {tets, 6}});
       out.push_back({"volume_ratio", f64, {tets}});
+    }
+    if (f.viscous) {
+      out.push_back({"dissipated_energy", f64, {}});
+      out.push_back({"viscous_stress", f64, {tets, 6}});
     }
     if (f.contact) {
       out.push_back({"contact_pressure", f64, {triangles}});
@@ -525,6 +534,7 @@ void write_reference(const H5File& f, const Mesh& mesh, const RunInfo& info) {
     f.create_zeros("/reference/strain", {tets, 6});
     f.write_array("/reference/volume_ratio", VectorX::Ones(mesh.num_tets()).eval());
   }
+  if (fields.viscous) f.create_zeros("/reference/viscous_stress", {tets, 6});
   if (fields.contact) {
     for (const char* field : {"contact_pressure", "contact_gap", "contact_fraction"})
       f.create_zeros(std::string("/reference/") + field, {tris});
@@ -629,7 +639,9 @@ void ResultsFile::State::check_step(const StepRecord& step, const Points& x, con
   if (v) expect_rows("v", v->rows(), num_nodes(), "#nodes");
   expect_rows("reactions", step.reactions.rows(), Eigen::Index(info.constraint_names.size()),
               "#constraints");
-  if ((fields.stress || fields.strain) && !elements) f.fail(what + ": element fields missing");
+  if ((fields.stress || fields.strain || fields.viscous) && !elements)
+    f.fail(what + ": element fields missing");
+  if (fields.viscous) expect_rows("viscous_stress", elements->viscous_stress.rows(), tets, "#tets");
   if (fields.stress) {
     expect_rows("stress", elements->stress.rows(), tets, "#tets");
     expect_rows("von_mises", elements->von_mises.rows(), tets, "#tets");
@@ -659,6 +671,8 @@ hsize_t ResultsFile::State::write_rows(const StepRecord& step, const Points& x, 
   f.write_row("/steps/settling", k, std::int32_t(step.settling));
   f.write_row("/steps/newton_iterations", k, std::int32_t(step.newton_iterations));
   f.write_row("/steps/linear_iterations", k, std::int32_t(step.linear_iterations));
+  f.write_row("/steps/linear_solves", k, std::int32_t(step.linear_solves));
+  f.write_row("/steps/factorizations", k, std::int32_t(step.factorizations));
   f.write_row("/steps/energy", k, step.energy);
   f.write_row("/steps/seconds", k, step.seconds);
   f.write_row("/steps/residual_count", k, std::int32_t(step.residuals.size()));
@@ -695,6 +709,11 @@ hsize_t ResultsFile::State::write_rows(const StepRecord& step, const Points& x, 
   if (fields.strain) {
     f.write_row("/steps/strain", k, elements->strain);
     f.write_row("/steps/volume_ratio", k, elements->volume_ratio);
+  }
+  if (fields.viscous) {
+    f.write_row("/steps/dissipated_energy", k,
+                step.dissipated_energy.value_or(std::numeric_limits<double>::quiet_NaN()));
+    f.write_row("/steps/viscous_stress", k, elements->viscous_stress);
   }
   if (fields.contact) {
     const SurfaceFields surface = surface_fields(tris, x, step.surface);

@@ -23,13 +23,13 @@
 ///   /steps: one row per completed step in each dataset, the step's row k: index (its step
 ///   index, written last: the number of rows of /steps/index is the number of completed steps;
 ///   other datasets may hold one more row, of a step not completed), load, settling,
-///   newton_iterations, linear_iterations, energy, seconds, residual_count, residuals (all steps'
-///   residuals one after the other, residual_count of them per step), reactions, x, and those the
-///   run writes: displacement, v, kinetic_energy (with velocities), contact_area,
-///   contact_forces, contact_force_magnitudes, contact_areas (with contact interfaces),
-///   penetration (with material-depth contact), stress, von_mises, strain, volume_ratio,
-///   contact_pressure, contact_traction, contact_gap, contact_fraction;
-///   /timing: phases (names) and seconds, one row per phase, rewritten after every step.
+///   newton_iterations, linear_iterations, linear_solves, factorizations, energy, seconds,
+///   residual_count, residuals (all steps' residuals one after the other, residual_count of them
+///   per step), reactions, x, and those the run writes: displacement, v, kinetic_energy (with
+///   velocities), contact_area, contact_forces, contact_force_magnitudes, contact_areas (with
+///   contact interfaces), penetration (with material-depth contact), stress, von_mises, strain,
+///   volume_ratio, contact_pressure, contact_traction, contact_gap, contact_fraction; /timing:
+///   phases (names) and seconds, one row per phase, rewritten after every step.
 /// The sidecars' blocks: one per body, except that a body with several element regions has one
 /// per region (the body's nodes, the region's tets). The sidecar's time of a step is its load
 /// (time-dependent runs: its time); ParaView shows one state per distinct time, so the settling
@@ -56,6 +56,9 @@ struct ResultFields {
   bool stress = false;       ///< Cauchy stress and von Mises stress per tet
   bool strain = false;       ///< logarithmic strain and volume ratio per tet
   bool contact = false;      ///< pressure, traction, gap and contact fraction per boundary triangle
+  /// Dissipated energy per step and viscous stress per tet (viscoelastic materials in a
+  /// time-dependent analysis).
+  bool viscous = false;
 };
 
 /// Metadata of a run written to /run at creation, and what its steps will hold.

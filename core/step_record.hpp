@@ -53,6 +53,8 @@ struct ElementFields {
   VectorX von_mises;                                ///< #tets von Mises stress [Pa]
   Eigen::Matrix<double, Eigen::Dynamic, 6> strain;  ///< #tets x 6 logarithmic strain ln V [-]
   VectorX volume_ratio;                             ///< #tets J = det F [-]
+  /// #tets x 6 Cauchy viscous stress of viscoelastic materials [Pa] (zero in elastic tets)
+  Eigen::Matrix<double, Eigen::Dynamic, 6> viscous_stress;
 };
 
 /// One completed step.
@@ -62,6 +64,8 @@ struct StepRecord {
   bool settling = false;          ///< a quasi-viscous step at full load (static)
   int newton_iterations = 0;      ///< implicit: Newton steps; ARKODE: internal Runge-Kutta steps
   int linear_iterations = 0;      ///< summed over the Newton steps
+  int linear_solves = 0;          ///< linear systems solved (one per Newton step)
+  int factorizations = 0;         ///< of those, solved by a new LL^T factorisation
   std::vector<double> residuals;  ///< |P grad E| [N] at every Newton iterate, the first included
   double energy = 0;              ///< potential energy [J]: every force module but inertia/damping
   double kinetic_energy = 0;      ///< 1/2 v^T M v [J] (time-dependent analyses; 0 otherwise)
@@ -77,6 +81,9 @@ struct StepRecord {
   /// Deepest geometric penetration [m] of the material-depth contact pairs (deepest_penetration;
   /// set by the scene runner), absent without material-depth contact.
   std::optional<double> penetration;
+  /// Energy [J] the viscoelastic materials dissipated over the step, absent without them (or in
+  /// a static analysis).
+  std::optional<double> dissipated_energy;
 
   /// Total contact area [m^2] over all interfaces.
   double contact_area() const {

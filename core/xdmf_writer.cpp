@@ -281,6 +281,7 @@ std::string XdmfSidecar::state(const SidecarStep& step) const {
       grid.attribute("strain", kCellSymmetric, tet_field("strain", b));
       grid.attribute("volume_ratio", kCellScalar, tet_field("volume_ratio", b));
     }
+    if (f.viscous) grid.attribute("viscous_stress", kCellSymmetric, tet_field("viscous_stress", b));
     grid.close();
   }
   const auto whole = [&](const char* dataset, Index rows) { return field(dataset, rows, 0, rows); };

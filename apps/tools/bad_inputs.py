@@ -229,6 +229,25 @@ def cases(exe):
                             "duration": duration}
         add("sizes and counts", f"dynamic duration {duration} step {step}",
             {"scene.json": scene(dynamic)})
+    for name, section in [
+            ("generalized_alpha rho_inf 1.5",
+             {"integrator": "generalized_alpha", "generalized_alpha": {"rho_inf": 1.5}}),
+            ("generalized_alpha rho_inf -0.1",
+             {"integrator": "generalized_alpha", "generalized_alpha": {"rho_inf": -0.1}}),
+            ("generalized_alpha section with newmark",
+             {"integrator": "newmark", "generalized_alpha": {"rho_inf": 0.5}}),
+            ("arkode_dirk order 6", {"integrator": "arkode_dirk", "arkode": {"order": 6}}),
+            ("arkode_dirk consistent mass", {"integrator": "arkode_dirk", "mass": "consistent"}),
+            ("arkode fixed_step as a number", {"integrator": "arkode_dirk",
+                                               "arkode": {"fixed_step": 1}})]:
+        def dynamic(s, section=section):
+            s["analysis"] = "dynamic"
+            s["dynamic"] = {"time_step": 0.01, "duration": 0.02, **section}
+        add("sizes and counts", f"dynamic {name}", {"scene.json": scene(dynamic)})
+    for every in [0, -3, 2**32 + 1, 1.5]:
+        def output(s, every=every):
+            s["output"] = {"every": every}
+        add("sizes and counts", f"output.every {every}", {"scene.json": scene(output)})
 
     # Materials and numbers that make the arithmetic non-finite.
     material = ["bodies", 0, "material"]
@@ -253,6 +272,25 @@ def cases(exe):
                        ("gravity infinite", setter(["gravity"], [0, 0, 1e400])),
                        ("displacement 1e300", setter(["boundary", 1, "displacement"],
                                                      [1e300, 0, 0]))]:
+        add("non-finite arithmetic and bad numbers", name, {"scene.json": scene(edit)})
+    viscoelastic = material + ["viscoelastic"]
+    ve = lambda times, weights: setter(viscoelastic,
+                                       {"relaxation_times": times, "weights": weights})
+    for name, edit in [("relaxation time negative", ve([0.1, -1], [0.2, 0.3])),
+                       ("relaxation time zero", ve([0], [0.2])),
+                       ("relaxation time 1e400", ve([1e400], [0.2])),
+                       ("Prony weight zero", ve([0.1], [0])),
+                       ("Prony weight negative", ve([0.1], [-0.2])),
+                       ("Prony weights summing to 1", ve([0.1, 1], [0.6, 0.4])),
+                       ("Prony weights summing to more than 1", ve([0.1, 1], [0.7, 0.9])),
+                       ("more weights than times", ve([0.1], [0.2, 0.3])),
+                       ("no relaxation times", ve([], [])),
+                       ("unknown static modulus",
+                        setter(viscoelastic, {"relaxation_times": [1], "weights": [0.5],
+                                              "static_modulus": "relaxed"})),
+                       ("viscoelastic with nodal pressure",
+                        lambda s: (ve([1], [0.5])(s), setter(material + ["formulation"],
+                                                             "nodal_pressure")(s)))]:
         add("non-finite arithmetic and bad numbers", name, {"scene.json": scene(edit)})
 
     # JSON.

@@ -122,6 +122,7 @@ class Results:
         values = {"step": [g["index"]], "load": [g["load"]], "settling": [g["settling"]],
                   "newton_iterations": [g["newton_iterations"]],
                   "linear_iterations": [g["linear_iterations"]],
+                  "linear_solves": [g["linear_solves"]], "factorizations": [g["factorizations"]],
                   "residual": [g["residuals"][-1] if g["residuals"].size else 0.0],
                   "energy": [g["energy"]]}
         if "kinetic_energy" in g:

@@ -137,6 +137,12 @@ void Constraints::project(BlockSparseMatrix& H) const {
                     });
 }
 
+std::vector<char> Constraints::fully_constrained_nodes() const {
+  std::vector<char> out(slot_.size(), 0);
+  for (const NodeState& s : states_) out[size_t(s.node)] = s.C.isIdentity(0) ? 1 : 0;
+  return out;
+}
+
 Eigen::Matrix<double, Eigen::Dynamic, 3> Constraints::reactions(const VectorX& g) const {
   Eigen::Matrix<double, Eigen::Dynamic, 3> R =
       Eigen::Matrix<double, Eigen::Dynamic, 3>::Zero(static_cast<Eigen::Index>(list_.size()), 3);

@@ -67,6 +67,9 @@ class Constraints {
   Eigen::Matrix<double, Eigen::Dynamic, 3> reactions(const VectorX& g) const;
 
   const std::vector<Constraint>& list() const { return list_; }
+  /// 1 for every node constrained in all three directions (C_i = I), 0 for the others: after
+  /// project(H) their rows and columns are zero off the diagonal.
+  std::vector<char> fully_constrained_nodes() const;
 
  private:
   struct NodeState {

@@ -113,13 +113,16 @@ double run_rows(const M& m, const TetBlock& b, const Index* scatter, const Point
   return energy;
 }
 
-// The chunks of a block color by color (run_by_color: deterministic for any number of threads).
+// The chunks of a block color by color (run_by_color: deterministic for any number of threads),
+// each chunk with its viscoelastic history term when the group has one.
 template <int kOrder, class M>
 double run_group(const M& m, const TetBlock& b, const Index* scatter, const Points& x, VectorX* g,
-                 BlockSparseMatrix* H, bool project) {
+                 BlockSparseMatrix* H, bool project, const ViscoelasticHistory* history) {
   return run_by_color(b.color_begin, 0.0, [&](Index k) {
-    return run_rows<kOrder>(m, b, scatter, x, b.chunk_begin[k], b.chunk_begin[k + 1], g, H,
-                            project);
+    const Index begin = b.chunk_begin[k], end = b.chunk_begin[k + 1];
+    double energy = run_rows<kOrder>(m, b, scatter, x, begin, end, g, H, project);
+    if (history) energy += history->evaluate_rows(b, scatter, x, begin, end, g, H, project);
+    return energy;
   });
 }
 
@@ -127,7 +130,7 @@ double run_group(const M& m, const TetBlock& b, const Index* scatter, const Poin
 
 Elasticity::Elasticity(const Points& X, const TetIndices& tets, std::vector<ElasticGroup> groups,
                        const ElasticityOptions& options)
-    : options_(options) {
+    : options_(options), num_tets_(static_cast<Index>(tets.rows())) {
   for (size_t i = 0; i < groups.size(); ++i) {
     ElasticGroup& in = groups[i];
     try {
@@ -145,9 +148,58 @@ Elasticity::Elasticity(const Points& X, const TetIndices& tets, std::vector<Elas
                          ", outside 0.." + std::to_string(tets.rows() - 1));
       }
     }
-    groups_.push_back(
-        {in.material, in.formulation, make_tet_block(X, tets, in.tets, in.fibers), {}});
+    if (!in.viscoelastic.empty()) {
+      try {
+        in.viscoelastic.validate();
+      } catch (const std::invalid_argument& e) {
+        throw InputError("material group " + std::to_string(i) + ": viscoelastic: " + e.what());
+      }
+      if (in.formulation != VolumeFormulation::kStandard) {
+        throw InputError("material group " + std::to_string(i) +
+                         ": viscoelastic needs the standard formulation");
+      }
+    }
+    Group& grp = groups_.emplace_back(in.material, in.formulation,
+                                      make_tet_block(X, tets, in.tets, in.fibers));
+    if (!in.viscoelastic.empty())
+      grp.history.emplace(in.viscoelastic, grp.block.size(), options_.duration > 0);
   }
+}
+
+bool Elasticity::has_history() const {
+  for (const Group& grp : groups_)
+    if (grp.history && grp.history->timed()) return true;
+  return false;
+}
+
+void Elasticity::begin_step(const Points& x) {
+  dissipated_ = 0;
+  for (Group& grp : groups_)
+    if (grp.history && !grp.history->started()) grp.history->start(grp.material, grp.block, x);
+}
+
+void Elasticity::set_load(double load) {
+  for (Group& grp : groups_)
+    if (grp.history) grp.history->set_time(load * options_.duration);
+}
+
+void Elasticity::complete_step(const Points& x) {
+  for (Group& grp : groups_)
+    if (grp.history) dissipated_ += grp.history->accept(grp.material, grp.block, x);
+}
+
+void Elasticity::report(const Points& /*x*/, StepRecord& step) const {
+  if (has_history()) step.dissipated_energy = dissipated_;
+}
+
+SymmetricColumns Elasticity::viscous_stress(const Points& x) const {
+  SymmetricColumns out = SymmetricColumns::Zero(num_tets_, 6);
+  for (const Group& grp : groups_) {
+    if (!grp.history) continue;
+    const SymmetricColumns rows = grp.history->viscous_stress(grp.block, x);
+    for (Index e = 0; e < grp.block.size(); ++e) out.row(grp.block.tet(e)) = rows.row(e);
+  }
+  return out;
 }
 
 void Elasticity::add_couplings(SparsityBuilder& builder) const {
@@ -174,17 +226,24 @@ double Elasticity::evaluate(const Points& x, VectorX* gradient, BlockSparseMatri
   for (const Group& grp : groups_) {
     if (hessian && grp.scatter.empty())
       throw std::logic_error("elasticity: bind() the Hessian first");
-    const auto run = [&](const auto& m) {
+    const auto run = [&](const auto& m, const ViscoelasticHistory* history) {
       if (hessian)
         return run_group<2>(m, grp.block, grp.scatter.data(), x, gradient, hessian,
-                            options_.project_hessian);
-      if (gradient) return run_group<1>(m, grp.block, nullptr, x, gradient, nullptr, false);
-      return run_group<0>(m, grp.block, nullptr, x, nullptr, nullptr, false);
+                            options_.project_hessian, history);
+      if (gradient)
+        return run_group<1>(m, grp.block, nullptr, x, gradient, nullptr, false, history);
+      return run_group<0>(m, grp.block, nullptr, x, nullptr, nullptr, false, history);
     };
+    // The group's model: the isochoric part alone (nodal pressure; never viscoelastic, see the
+    // constructor), the material with its isochoric part scaled as the viscoelastic history says
+    // (materials/viscoelastic.hpp), or the material as given.
     total += std::visit(
         [&]<class M>(const M& m) {
-          if (grp.formulation == VolumeFormulation::kNodalPressure) return run(Isochoric<M>{m});
-          return run(m);
+          if (grp.formulation == VolumeFormulation::kNodalPressure)
+            return run(Isochoric<M>{m}, nullptr);
+          if (grp.history)
+            return run(IsochoricScaled<M>{m, grp.history->isochoric_scale()}, &*grp.history);
+          return run(m, nullptr);
         },
         grp.material);
   }

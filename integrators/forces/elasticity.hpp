@@ -1,10 +1,12 @@
 #pragma once
 /// Hyperelastic force module: TBB-parallel tet kernels over material groups.
 
+#include <optional>
 #include <vector>
 
 #include "core/force_module.hpp"
 #include "core/tet_block.hpp"
+#include "integrators/forces/viscoelastic_history.hpp"
 #include "materials/material.hpp"
 
 namespace depthfem {
@@ -23,6 +25,9 @@ struct ElasticGroup {
   std::vector<Index> tets;  ///< global tet ids
   Points fibers;            ///< #tets x 3 or empty
   VolumeFormulation formulation = VolumeFormulation::kStandard;
+  /// Relaxation of the isochoric stress (materials/viscoelastic.hpp); empty: elastic. Only with
+  /// the standard formulation.
+  PronySeries viscoelastic = {};
 };
 
 /// Options of the elastic force module.
@@ -31,6 +36,9 @@ struct ElasticityOptions {
   /// added (psd_projection.hpp): the assembled Hessian is then positive semi-definite however the
   /// elements are compressed, at the price of one 12x12 eigen-decomposition per tet.
   bool project_hessian = false;
+  /// Seconds per unit of load (the duration of a time-dependent analysis: load = t / duration);
+  /// 0 for a static analysis, where viscoelastic groups use their static modulus.
+  double duration = 0;
 };
 
 /// Sum over groups of V psi(F) per tet. Each group's data is a color-ordered TetBlock, and the
@@ -50,6 +58,22 @@ class Elasticity final : public ForceModule {
   void bind(const BlockSparseMatrix& hessian) override;
   double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
 
+  /// Viscoelastic groups: the history starts at the first step's x, each step ends at time
+  /// load * duration, and an accepted step moves the history to its x.
+  void begin_step(const Points& x) override;
+  void set_load(double load) override;
+  void complete_step(const Points& x) override;
+  /// Energy [J] the viscoelastic groups dissipated since the last begin_step: over the step, in
+  /// as many accepted parts as it was completed in (ARKODE's internal steps; 0 without).
+  double dissipated_energy() const { return dissipated_; }
+  /// Whether some group is viscoelastic in time (a time-dependent analysis).
+  bool has_history() const;
+  /// With a history: the dissipated energy of the step (StepRecord::dissipated_energy).
+  void report(const Points& x, StepRecord& step) const override;
+  /// #tets x 6 (global tet order; xx, yy, zz, xy, yz, xz) Cauchy viscous stress of the last
+  /// accepted step at its positions x [Pa]; zero in elastic groups.
+  SymmetricColumns viscous_stress(const Points& x) const;
+
   /// Largest a such that every tet keeps det F > 0 along x + a dx, looked for up to a = 2 (a
   /// Newton step is at most 1); +infinity beyond.
   double max_step(const Points& x, const Points& dx) const override;
@@ -63,9 +87,12 @@ class Elasticity final : public ForceModule {
     VolumeFormulation formulation;
     TetBlock block;
     std::vector<Index> scatter;  ///< 16 block indices per row: (a, b) at 16 e + 4 a + b
+    std::optional<ViscoelasticHistory> history;  ///< viscoelastic groups only
   };
   std::vector<Group> groups_;
   ElasticityOptions options_;
+  Index num_tets_ = 0;
+  double dissipated_ = 0;
 };
 
 }  // namespace depthfem

@@ -26,6 +26,13 @@ double System::max_step(const Points& x, const Points& dx) const {
   return alpha;
 }
 
+void System::complete_step(const Points& x) {
+  for (const auto& m : modules_) {
+    PhaseTimers::Scope t(timers_, "force/stiffness: " + m->name());
+    m->complete_step(x);
+  }
+}
+
 void System::report(const Points& x, StepRecord& step) const {
   for (const auto& m : modules_) m->report(x, step);
 }

@@ -44,6 +44,8 @@ class System {
   double hessian(const Points& x, VectorX& g);
   /// Smallest max_step(x, dx) over the modules (+infinity when none limits the step).
   double max_step(const Points& x, const Points& dx) const;
+  /// Calls every module's complete_step(x): the step at x is accepted.
+  void complete_step(const Points& x);
   /// Lets every module add to the record of a converged step at x (after prepare(x)).
   void report(const Points& x, StepRecord& step) const;
   /// The modules' interface_names(), in module order: the rows report() appends.

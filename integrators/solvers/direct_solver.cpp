@@ -51,23 +51,30 @@ double lowest_eigenvalue_estimate(const BlockSparseMatrix& A, const VectorX& wei
   return T.eigenvalues()(0);
 }
 
-// The graph of the 3x3 blocks of M as a CHOLMOD pattern matrix with its upper triangle read
-// (stype 1; the full pattern is symmetric), freed with the common it was allocated with.
-auto block_graph(const BlockSparseMatrix& M, cholmod_common& c) {
+// The graph of the 3x3 blocks of M that `kept` keeps (ScalarPattern::keeps) as a CHOLMOD
+// pattern matrix with its upper triangle read (stype 1; the full pattern is symmetric), freed
+// with the common it was allocated with.
+auto block_graph(const BlockSparseMatrix& M, const ScalarPattern& kept, cholmod_common& c) {
   const auto free_sparse = [&c](cholmod_sparse* S) { cholmod_free_sparse(&S, &c); };
   const Index nodes = M.num_nodes();
   std::unique_ptr<cholmod_sparse, decltype(free_sparse)> G(
       cholmod_allocate_sparse(nodes, nodes, M.num_blocks(), 1, 1, 1, CHOLMOD_PATTERN, &c),
       free_sparse);
   if (!G) throw std::runtime_error("CHOLMOD allocation failed");
-  for (Index i = 0; i <= nodes; ++i) static_cast<int*>(G->p)[i] = M.row_begin(i);
-  for (Index k = 0; k < M.num_blocks(); ++k) static_cast<int*>(G->i)[k] = M.block_col(k);
+  int* p = static_cast<int*>(G->p);
+  int* rows = static_cast<int*>(G->i);
+  p[0] = 0;
+  for (Index i = 0; i < nodes; ++i) {
+    p[i + 1] = p[i];
+    for (Index k = M.row_begin(i); k < M.row_begin(i + 1); ++k)
+      if (kept.keeps(i, M.block_col(k))) rows[p[i + 1]++] = M.block_col(k);
+  }
   return G;
 }
 
 }  // namespace
 
-double predicted_factor_flops(const BlockSparseMatrix& A) {
+double predicted_factor_flops(const BlockSparseMatrix& A, std::vector<char> decoupled) {
   cholmod_common c;
   cholmod_start(&c);
   c.print = 0;
@@ -76,7 +83,7 @@ double predicted_factor_flops(const BlockSparseMatrix& A) {
   c.supernodal = CHOLMOD_SIMPLICIAL;  // column counts only
   double flops = -1;
   {
-    const auto G = block_graph(A, c);
+    const auto G = block_graph(A, ScalarPattern{.decoupled = std::move(decoupled)}, c);
     cholmod_factor* L = cholmod_analyze(G.get(), &c);
     if (L) flops = 27 * c.fl;
     cholmod_free_factor(&L, &c);
@@ -92,6 +99,7 @@ double lower_triangle_entries(const BlockSparseMatrix& A) {
 
 struct DirectSolver::Impl {
   DirectSolverOptions options;
+  std::vector<char> decoupled;  // nodes left out of the pattern off the diagonal
   cholmod_common c;
   std::uint64_t version = 0;    // pattern version of the analysis (0: none)
   ScalarPattern pattern;        // upper triangle by rows = lower triangle by columns
@@ -131,6 +139,11 @@ struct DirectSolver::Impl {
                                std::to_string(c.status) + ")");
   }
 
+  // Fills `pattern` and `diagonal` for M and returns its lower triangle with that pattern.
+  cholmod_sparse* lower_triangle(const BlockSparseMatrix& M);
+  // Keeps the ordering and symbolic factor when M's pattern fits in the factor's (a contact
+  // coupling already present as fill): only where A's entries land in L is found anew.
+  bool refit(const BlockSparseMatrix& M);
   void analyse(const BlockSparseMatrix& M);
   std::vector<int> node_ordering(cholmod_sparse* G, DirectOrdering ordering);
   cholmod_factor* analyse_with(int supernodal);
@@ -166,25 +179,49 @@ cholmod_factor* DirectSolver::Impl::analyse_with(int supernodal) {
   return L;
 }
 
-void DirectSolver::Impl::analyse(const BlockSparseMatrix& M) {
-  release_pattern();
-  pattern = M.scalar_pattern(Triangle::kUpper);
+cholmod_sparse* DirectSolver::Impl::lower_triangle(const BlockSparseMatrix& M) {
+  pattern = M.scalar_pattern(Triangle::kUpper, decoupled);
   const size_t n = pattern.row_begin.size() - 1, nnz = pattern.col.size();
-  A = cholmod_allocate_sparse(n, n, nnz, 1, 1, -1, CHOLMOD_REAL, &c);
+  cholmod_sparse* out = cholmod_allocate_sparse(n, n, nnz, 1, 1, -1, CHOLMOD_REAL, &c);
   check("allocate");
-  std::copy(pattern.row_begin.begin(), pattern.row_begin.end(), static_cast<int*>(A->p));
-  std::copy(pattern.col.begin(), pattern.col.end(), static_cast<int*>(A->i));
+  std::copy(pattern.row_begin.begin(), pattern.row_begin.end(), static_cast<int*>(out->p));
+  std::copy(pattern.col.begin(), pattern.col.end(), static_cast<int*>(out->i));
   diagonal.resize(n);  // every diagonal block is in the pattern
   for (size_t j = 0; j < n; ++j) {
     const auto row = pattern.col.begin();
     diagonal[j] =
         std::find(row + pattern.row_begin[j], row + pattern.row_begin[j + 1], Index(j)) - row;
   }
-  const auto G = block_graph(M, c);
+  return out;
+}
+
+bool DirectSolver::Impl::refit(const BlockSparseMatrix& M) {
+  if (!llt || M.num_nodes() != static_cast<Index>(llt->n / 3)) return false;
+  cholmod_sparse* next = lower_triangle(M);
+  std::unique_ptr<SupernodalCholesky> numeric = SupernodalCholesky::fitted(*next, *llt, c);
+  if (!numeric) {
+    cholmod_free_sparse(&next, &c);
+    return false;
+  }
+  cholmod_free_sparse(&A, &c);
+  cholmod_free_factor(&ldlt, &c);
+  A = next;
+  llt_numeric = std::move(numeric);
+  llt_valid = false;
+  version = M.pattern_version();
+  ++analysis.refitted;
+  return true;
+}
+
+void DirectSolver::Impl::analyse(const BlockSparseMatrix& M) {
+  if (refit(M)) return;
+  release_pattern();
+  A = lower_triangle(M);
+  const auto G = block_graph(M, pattern, c);
   const auto try_ordering = [&](DirectOrdering o) {
     perm = node_ordering(G.get(), o);
     llt = analyse_with(CHOLMOD_SUPERNODAL);
-    analysis = {o, c.fl, c.lnz};
+    analysis = {o, c.fl, c.lnz, 0};
   };
   const DirectOrdering first =
       options.ordering == DirectOrdering::kMetis ? DirectOrdering::kMetis : DirectOrdering::kAmd;
@@ -249,6 +286,12 @@ void DirectSolver::Impl::solve_with(cholmod_factor* L, const VectorX& b, VectorX
 
 DirectSolver::DirectSolver(DirectSolverOptions options) : impl_(std::make_unique<Impl>(options)) {}
 DirectSolver::~DirectSolver() = default;
+
+void DirectSolver::set_decoupled_nodes(std::vector<char> nodes) {
+  if (nodes == impl_->decoupled) return;
+  impl_->release_pattern();
+  impl_->decoupled = std::move(nodes);
+}
 
 const DirectAnalysis& DirectSolver::analyse(const BlockSparseMatrix& M) {
   if (impl_->version != M.pattern_version()) impl_->analyse(M);

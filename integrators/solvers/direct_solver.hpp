@@ -35,6 +35,8 @@ struct DirectAnalysis {
   DirectOrdering ordering = DirectOrdering::kAmd;  ///< the ordering used (kAmd or kMetis)
   double flops = 0;                                ///< of one LL^T factorisation
   double factor_entries = 0;                       ///< nonzeros of L
+  /// Patterns since this ordering was computed that fit in its factor (kept it).
+  int refitted = 0;
 };
 
 /// The flops of an LL^T factorisation of A predicted from the graph of its 3x3 blocks alone: an
@@ -42,8 +44,9 @@ struct DirectAnalysis {
 /// pattern, and no supernodal analysis. A block column of L with c blocks is three scalar
 /// columns of about 3c entries, so the scalar flops are about 27 times the block graph's (a
 /// slight overestimate, and with AMD where DirectSolver::analyse may find METIS better). This
-/// is what LinearSolver's auto compares, before the direct solver is needed.
-double predicted_factor_flops(const BlockSparseMatrix& A);
+/// is what LinearSolver's auto compares, before the direct solver is needed. The off-diagonal
+/// blocks of `decoupled` nodes are left out, as the direct solver leaves them out.
+double predicted_factor_flops(const BlockSparseMatrix& A, std::vector<char> decoupled = {});
 /// The scalar entries of A's lower triangle, diagonal included: what flops are counted per (a
 /// factorisation's flops per entry are large for a bulky mesh, small for a slender one).
 double lower_triangle_entries(const BlockSparseMatrix& A);
@@ -61,12 +64,13 @@ struct DirectSolveStats {
 /// compressed-column form through a scalar pattern built once per pattern version; the ordering
 /// and symbolic analysis are also done once per pattern version (BlockSparseMatrix::
 /// pattern_version()), so that a changed contact pattern with the same number of blocks is
-/// analysed anew. The fill-reducing ordering is computed on the graph of the 3x3 blocks and
-/// expanded to the dofs. A failed LL^T (A indefinite) falls back as the options say.
-/// Between Newton iterations the matrix changes little: CG preconditioned by the last LL^T
-/// factor converges in a few iterations, each two triangular solves (about 4 nnz(L) flops,
-/// memory bound) against a factorisation's F flops (compute bound). CG gets F / (40 nnz(L))
-/// iterations (2 to 50) before the matrix is factored after all.
+/// analysed anew, or, when all its entries lie in the factor's pattern (new couplings within
+/// the fill, or of decoupled nodes), only mapped into the factor analysed before. The fill-reducing
+/// ordering is computed on the graph of the 3x3 blocks and expanded to the dofs. A failed LL^T (A
+/// indefinite) falls back as the options say. Between Newton iterations the matrix changes little:
+/// CG preconditioned by the last LL^T factor converges in a few iterations, each two triangular
+/// solves (about 4 nnz(L) flops, memory bound) against a factorisation's F flops (compute bound).
+/// CG gets F / (40 nnz(L)) iterations (2 to 50) before the matrix is factored after all.
 class DirectSolver {
  public:
   explicit DirectSolver(DirectSolverOptions options = {});
@@ -74,7 +78,14 @@ class DirectSolver {
   DirectSolver(const DirectSolver&) = delete;
   DirectSolver& operator=(const DirectSolver&) = delete;
 
-  /// Orders and analyses the pattern of A unless it was already (the solve then reuses it).
+  /// Nodes (1 per node, or empty) whose off-diagonal blocks every later A holds zero: the fully
+  /// prescribed ones, after Constraints::project. Their couplings are left out of the pattern
+  /// that is ordered and factored (which the factor does not change), so that contact with a
+  /// prescribed body, coming and going, does not change it.
+  void set_decoupled_nodes(std::vector<char> nodes);
+  /// Orders and analyses the pattern of A unless it was already (the solve then reuses it). A
+  /// new pattern of A whose entries all lie in the pattern of the factor analysed before keeps
+  /// that factor's ordering and symbolic analysis.
   const DirectAnalysis& analyse(const BlockSparseMatrix& A);
   /// x = A^-1 b (or (A + s diag|A|)^-1 b, see DirectSolveStats::shift). CG on a kept factor
   /// stops at |b - A x| <= tolerance |b| (0: the options' reuse_tolerance).

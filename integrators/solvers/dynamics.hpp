@@ -1,7 +1,8 @@
 #pragma once
 /// Options and step records shared by the time integrators (paper section 4 and the explicit
-/// comparators): implicit Euler and Newmark (implicit_stepper.hpp), symplectic Euler
-/// (symplectic_euler.hpp) and SUNDIALS ARKODE ERKStep (arkode_stepper.hpp).
+/// comparators): implicit Euler, Newmark and generalized-alpha (implicit_stepper.hpp), symplectic
+/// Euler (symplectic_euler.hpp) and SUNDIALS ARKODE, ERKStep and ARKStep's diagonally implicit
+/// methods (arkode_stepper.hpp).
 
 #include "integrators/solvers/newton.hpp"
 
@@ -11,9 +12,17 @@ namespace depthfem {
 enum class Integrator {
   kImplicitEuler,  ///< first order, implicit, dissipative
   kNewmark,  ///< Newmark average acceleration (trapezoidal): second order, implicit, no dissipation
-  kSymplecticEuler,  ///< first order, explicit, conditionally stable
-  kArkode,           ///< SUNDIALS ERKStep: adaptive explicit Runge-Kutta of a chosen order
+  kSymplecticEuler,   ///< first order, explicit, conditionally stable
+  kArkode,            ///< SUNDIALS ERKStep: adaptive explicit Runge-Kutta of a chosen order
+  kGeneralizedAlpha,  ///< Chung-Hulbert: second order, implicit, tunable high-frequency damping
+  kArkodeDirk,        ///< SUNDIALS ARKStep: adaptive diagonally implicit Runge-Kutta (order 2-5)
 };
+
+/// Whether the scheme solves a nonlinear system per step (or stage) with Newton over a System
+/// that carries inertia and damping as tethers.
+constexpr bool is_implicit(Integrator integrator) {
+  return integrator != Integrator::kSymplecticEuler && integrator != Integrator::kArkode;
+}
 
 /// Rayleigh damping C = alpha M + beta K(x^n).
 struct RayleighDamping {
@@ -26,12 +35,14 @@ constexpr bool has_erk_table(int order) {
   return order >= 2 && order <= 8 && order != 7;
 }
 
-/// ERKStep settings (integrator kArkode).
+/// ARKODE settings (integrators kArkode and kArkodeDirk).
 struct ArkodeOptions {
-  int order = 4;  ///< one with has_erk_table(order)
+  int order = 4;  ///< kArkode: has_erk_table(order); kArkodeDirk: has_dirk_table(order)
   double relative_tolerance = 1e-6;
   double absolute_tolerance = 1e-9;  ///< [m] on positions, [m/s] on velocities
   long max_steps = 100000;           ///< internal steps per output interval
+  /// Internal steps of exactly time_step, without error control (for measured orders).
+  bool fixed_step = false;
 };
 
 /// Newmark's parameters: x^{n+1} = x^n + h v^n + h^2 ((1/2 - beta) a^n + beta a^{n+1}),
@@ -42,6 +53,29 @@ struct NewmarkOptions {
   double beta = 0.25;
   double gamma = 0.5;
 };
+
+/// Chung and Hulbert's generalized-alpha method (J. Appl. Mech. 60, 1993): the balance
+/// M a^{n+1-alpha_m} + C v^{n+1-alpha_f} + grad E(x^{n+1-alpha_f}) = 0 with
+/// y^{n+1-alpha} = (1 - alpha) y^{n+1} + alpha y^n and Newmark's updates, where
+/// alpha_m = (2 rho - 1) / (rho + 1), alpha_f = rho / (rho + 1), gamma = 1/2 - alpha_m + alpha_f,
+/// beta = (1 - alpha_m + alpha_f)^2 / 4 for the spectral radius rho = rho_inf at infinite
+/// frequency: second order, unconditionally stable for linear problems; rho_inf = 1 is the
+/// non-dissipative midpoint-like rule, rho_inf = 0 annihilates the highest frequencies in one step.
+struct GeneralizedAlphaOptions {
+  double rho_inf = 0.8;  ///< in [0, 1]
+};
+
+/// The four parameters of a generalized-alpha step: Newmark is alpha_m = alpha_f = 0.
+struct AlphaParameters {
+  double alpha_m = 0, alpha_f = 0, beta = 0.25, gamma = 0.5;
+};
+/// Chung and Hulbert's optimal parameters for rho_inf (GeneralizedAlphaOptions).
+AlphaParameters chung_hulbert(double rho_inf);
+
+/// Whether ARKStep has a default diagonally implicit table of this order (2, 3, 4 or 5).
+constexpr bool has_dirk_table(int order) {
+  return order >= 2 && order <= 5;
+}
 
 /// Which mass matrix the inertia of an implicit scheme uses.
 enum class MassMatrix {
@@ -56,7 +90,8 @@ struct DynamicOptions {
   double time_step = 1e-2;  ///< h [s]; the output interval for ARKODE
   double duration = 1.0;    ///< simulated time [s]; prescribed motions ramp with t / duration
   RayleighDamping damping;
-  ArkodeOptions arkode;
+  ArkodeOptions arkode;  ///< also for kArkodeDirk (order: has_dirk_table)
+  GeneralizedAlphaOptions generalized_alpha;
   NewtonOptions newton;
 };
 

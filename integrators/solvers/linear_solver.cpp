@@ -35,6 +35,11 @@ VectorX inverse_diagonal(const BlockSparseMatrix& A) {
 
 LinearSolver::LinearSolver(LinearSolverOptions options) : options_(options) {}
 
+void LinearSolver::set_decoupled_nodes(std::vector<char> nodes) {
+  decoupled_ = std::move(nodes);
+  if (direct_) direct_->set_decoupled_nodes(decoupled_);
+}
+
 LinearSolveStats LinearSolver::solve(const BlockSparseMatrix& A, const VectorX& b, VectorX& x,
                                      const Points* positions, double tolerance) {
   x.setZero(b.size());
@@ -42,10 +47,10 @@ LinearSolveStats LinearSolver::solve(const BlockSparseMatrix& A, const VectorX& 
   switch (options_.kind) {
     case LinearSolverKind::kAuto:
       if (choice_ == Choice::kUndecided) {
-        choice_ =
-            predicted_factor_flops(A) > options_.auto_flops_per_entry * lower_triangle_entries(A)
-                ? Choice::kAmg
-                : Choice::kDirect;
+        choice_ = predicted_factor_flops(A, decoupled_) >
+                          options_.auto_flops_per_entry * lower_triangle_entries(A)
+                      ? Choice::kAmg
+                      : Choice::kDirect;
       }
       return choice_ == Choice::kAmg ? amg(A, b, x, positions) : direct(A, b, x, tolerance);
     case LinearSolverKind::kAmg:
@@ -155,13 +160,16 @@ LinearSolveStats LinearSolver::cg(const BlockSparseMatrix& A, const VectorX& b, 
 // Iterations: one per factorisation plus the CG iterations on a kept factor.
 LinearSolveStats LinearSolver::direct(const BlockSparseMatrix& A, const VectorX& b, VectorX& x,
                                       double tolerance) {
-  if (!direct_) direct_ = std::make_unique<DirectSolver>(options_.direct);
+  if (!direct_) {
+    direct_ = std::make_unique<DirectSolver>(options_.direct);
+    direct_->set_decoupled_nodes(decoupled_);
+  }
   const DirectSolveStats d = direct_->solve(A, b, x, tolerance);
   const int iterations = (d.factored ? 1 : 0) + d.cg_iterations;
-  if (!d.success) return {iterations, 1.0, false, d.shift};
+  if (!d.success) return {iterations, 1.0, false, d.shift, d.factored};
   VectorX Ax;
   A.multiply(x, Ax);
-  return {iterations, (b - Ax).norm() / b.norm(), true, d.shift};
+  return {iterations, (b - Ax).norm() / b.norm(), true, d.shift, d.factored};
 }
 
 // CG needs a positive definite matrix; one it fails on (indefinite: deep contact, past a

@@ -44,6 +44,7 @@ struct LinearSolveStats {
   double relative_residual = 0;    ///< |b - A x| / |b|
   bool reached_tolerance = false;  ///< iterative: tolerance met; direct: factorisation succeeded
   double shift = 0;                ///< direct: s of the factored A + s diag|A| (A indefinite)
+  bool factored = false;           ///< direct: A was factored anew (not CG on a kept factor)
 };
 
 /// Solves A x = b with the chosen method (see DirectSolver and AmgSolver). kAuto decides on the
@@ -57,6 +58,9 @@ class LinearSolver {
  public:
   explicit LinearSolver(LinearSolverOptions options = {});
   const LinearSolverOptions& options() const { return options_; }
+  /// Nodes whose off-diagonal blocks every matrix to solve holds zero (1 per node; see
+  /// DirectSolver::set_decoupled_nodes).
+  void set_decoupled_nodes(std::vector<char> nodes);
   /// Starts from x = 0. Returns statistics; x holds the best solution found. `positions`
   /// (#nodes x 3, current) give AMG its rigid-body modes (without them: translations only).
   /// `tolerance` (Newton's forcing term; 0: none) is where the direct solver's CG on a kept
@@ -77,6 +81,7 @@ class LinearSolver {
                        const Points* positions);
 
   LinearSolverOptions options_;
+  std::vector<char> decoupled_;
   std::unique_ptr<DirectSolver> direct_;  // created on first use
   std::unique_ptr<AmgSolver> amg_;        // created on first use (starts PETSc and MPI)
   enum class Choice { kUndecided, kDirect, kAmg } choice_ = Choice::kUndecided;  // kAuto

@@ -106,6 +106,8 @@ NewtonResult NewtonSolver::solve(Points& x) {
     // multigrid preconditioner couples them with the free ones); keep the step free of them.
     constraints_.project(dx);
     result.linear_iterations += stats.iterations;
+    ++result.linear_solves;
+    result.factorizations += stats.factored ? 1 : 0;
     if (!dx.allFinite()) {
       result.failure = "the linear solver failed (" + to_string(linear_.options().kind) + ")";
       return result;

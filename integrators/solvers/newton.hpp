@@ -49,6 +49,8 @@ struct NewtonResult {
   bool converged = false;
   int iterations = 0;             ///< Newton steps taken
   int linear_iterations = 0;      ///< summed over steps
+  int linear_solves = 0;          ///< one per Newton step
+  int factorizations = 0;         ///< direct LL^T factorisations among those solves
   std::vector<double> residuals;  ///< |P grad E| at every iterate, the first included
   double energy = 0;              ///< at the final iterate [J]
   std::string failure;            ///< why it stopped without converging
@@ -66,7 +68,9 @@ struct NewtonResult {
 class NewtonSolver {
  public:
   NewtonSolver(System& system, const Constraints& constraints, NewtonOptions options)
-      : system_(system), constraints_(constraints), options_(options), linear_(options.linear) {}
+      : system_(system), constraints_(constraints), options_(options), linear_(options.linear) {
+    linear_.set_decoupled_nodes(constraints.fully_constrained_nodes());
+  }
 
   /// Solves in place from x, whose constrained components must already hold their targets.
   NewtonResult solve(Points& x);

@@ -24,12 +24,15 @@ void StepLifecycle::complete(double load, const NewtonResult& newton, const Poin
   step.settling = settling;
   step.newton_iterations = newton.iterations;
   step.linear_iterations = newton.linear_iterations;
+  step.linear_solves = newton.linear_solves;
+  step.factorizations = newton.factorizations;
   step.residuals = newton.residuals;
   last_energy_ = gradient(x, last_gradient_);
   step.energy = last_energy_;
   for (const Tether* tether : terms_.excluded) step.energy -= tether->evaluate(x, nullptr, nullptr);
   if (v && terms_.mass) step.kinetic_energy = terms_.mass->quadratic_form(*v);
   step.reactions = constraints_.reactions(last_gradient_);
+  system_.complete_step(x);
   system_.report(x, step);
   step.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   timing_ = false;

@@ -49,8 +49,9 @@ class StepLifecycle {
   double gradient(const Points& x, VectorX& g);
 
   /// Completes step `load` (load factor or time [s]) at the converged x (v: velocities or null):
-  /// prepare(x) and the gradient at x for reactions and energy, the modules' reports, the
-  /// observer. `newton` gives the iteration counts and residuals of the solve.
+  /// prepare(x) and the gradient at x for reactions and energy, the modules' complete_step
+  /// (internal variables move to x) and reports, the observer. `newton` gives the iteration counts
+  /// and residuals of the solve.
   void complete(double load, const NewtonResult& newton, const Points& x, const Points* v,
                 bool settling = false);
 

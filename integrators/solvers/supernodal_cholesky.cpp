@@ -16,6 +16,23 @@ namespace depthfem {
 // columns at x[px[s]].
 SupernodalCholesky::SupernodalCholesky(const cholmod_sparse& A, cholmod_factor& L,
                                        cholmod_common& common) {
+  bool fits = false;
+  *this = SupernodalCholesky(A, L, common, fits);
+  if (!fits) throw std::invalid_argument("SupernodalCholesky: an entry of A is not in L's pattern");
+}
+
+std::unique_ptr<SupernodalCholesky> SupernodalCholesky::fitted(const cholmod_sparse& A,
+                                                               cholmod_factor& L,
+                                                               cholmod_common& common) {
+  bool fits = false;
+  std::unique_ptr<SupernodalCholesky> out(new SupernodalCholesky(A, L, common, fits));
+  if (!fits) out.reset();
+  return out;
+}
+
+SupernodalCholesky::SupernodalCholesky(const cholmod_sparse& A, cholmod_factor& L,
+                                       cholmod_common& common, bool& fits) {
+  fits = false;
   if (!L.is_super || L.itype != CHOLMOD_INT || A.stype >= 0 || A.xtype != CHOLMOD_REAL ||
       !A.packed || A.nrow != L.n || A.ncol != L.n)
     throw std::invalid_argument(
@@ -52,8 +69,7 @@ SupernodalCholesky::SupernodalCholesky(const cholmod_sparse& A, cholmod_factor& 
       const int* first = rows + pi[s];
       const int* last = rows + pi[s + 1];
       const int* at = std::lower_bound(first, last, row);
-      if (at == last || *at != row)
-        throw std::invalid_argument("SupernodalCholesky: an entry of A is not in L's pattern");
+      if (at == last || *at != row) return;
       super_of_entry.push_back(s);
       source.push_back(p);
       destination.push_back(size_t(px[s]) + size_t(col - super[s]) * (last - first) + (at - first));
@@ -75,6 +91,7 @@ SupernodalCholesky::SupernodalCholesky(const cholmod_sparse& A, cholmod_factor& 
   position_.resize(nsuper);
   row_map_.resize(n);
   relative_map_.resize(n);
+  fits = true;
 }
 
 bool SupernodalCholesky::factorize(const cholmod_sparse& A, cholmod_factor& L) {

@@ -5,6 +5,7 @@
 #include <cholmod.h>
 
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 namespace depthfem {
@@ -23,11 +24,21 @@ class SupernodalCholesky {
   /// until factorize); L and the pattern of A must not change while this is used.
   SupernodalCholesky(const cholmod_sparse& A, cholmod_factor& L, cholmod_common& common);
 
+  /// The same for an A whose pattern may differ from the one L was analysed for: null when an
+  /// entry of A falls outside L's pattern (a new analysis is needed), else the mapping, with
+  /// which L factors A under L's permutation and supernodes as if analysed for it.
+  static std::unique_ptr<SupernodalCholesky> fitted(const cholmod_sparse& A, cholmod_factor& L,
+                                                    cholmod_common& common);
+
   /// L = chol(P A P^T) with A's current values. False when A is not positive definite: then
   /// L->minor is the first column whose pivot is not positive and L is not usable.
   bool factorize(const cholmod_sparse& A, cholmod_factor& L);
 
  private:
+  // Maps A into L; `fits` tells whether every entry of A found its place.
+  SupernodalCholesky(const cholmod_sparse& A, cholmod_factor& L, cholmod_common& common,
+                     bool& fits);
+
   std::vector<int> super_of_column_;       // supernode of every column of L
   std::vector<size_t> entry_begin_;        // entries of A per supernode, nsuper + 1
   std::vector<int> entry_source_;          // position in A->x, grouped by supernode

@@ -57,6 +57,25 @@ void expect_homogeneous(const std::string& h5, Index step, const Mat3& F, const 
 // uniaxial_block stretched to l = 1.5: F = diag(l, t, t) with the closed-form lateral stretch,
 // sigma = diag(P11 / t^2, 0, 0). The solve leaves the nodes within 1e-8 m of the closed form (the
 // scene test), so F, the strain and the stress relative to their scale are within about 1e-7.
+// output.every N writes every N-th completed step and the last one (here 5 steps, N = 2: steps
+// 1, 3 and 4), with its own index and the same positions as a run that writes every step. (A
+// failed run's last completed step takes the same path: written when the driver returns.)
+TEST(RunScene, OutputEveryNStepsKeepsTheLast) {
+  const TemporaryResults all("every_1"), some("every_2");
+  const RunResult a = run(load("falling_bars", {"dynamic.duration=0.05"}), all.path);
+  const RunResult b =
+      run(load("falling_bars", {"dynamic.duration=0.05", "output.every=2"}), some.path);
+  ASSERT_TRUE(a.success && b.success) << a.message << b.message;
+  ASSERT_EQ(b.steps.size(), 5u) << "every step is still completed and kept";
+  EXPECT_EQ(read_results_summary(all.path).num_steps, 5);
+  EXPECT_EQ(read_results_summary(some.path).num_steps, 3);
+  for (Index index : {1, 3, 4}) {
+    const StepState written = read_step_state(some.path, index);
+    EXPECT_EQ(written.x, read_step_state(all.path, index).x) << "step " << index;
+  }
+  EXPECT_THROW(read_step_state(some.path, 2), InputError) << "step 2 is not written";
+}
+
 TEST(RunScene, UniaxialStressAndStrainReadBackMatchTheClosedForm) {
   const auto check = [](const std::string& material_json, const auto& model) {
     SCOPED_TRACE(material_json);
@@ -77,26 +96,38 @@ TEST(RunScene, UniaxialStressAndStrainReadBackMatchTheClosedForm) {
         FiberReinforced<Veronda>{{1.5e3, 0.8, 2e4}, 2e3, 3});
 }
 
-// The unit cube with every node moved by simple shear u = g y e_x (one condition per layer of
-// nodes y = 0, 0.5, 1): F = I + g e_x e_y^T in every tet exactly, sigma = P F^T (J = 1) with the
+// The boundary conditions of uniaxial_block that move every node by simple shear u = g y e_x,
+// one condition per layer of nodes y = 0, 0.5, 1 (ramped with the load factor or time).
+std::string shear_layers(double g) {
+  const auto text = [](double v) {  // every digit: std::to_string would round 5e-7 to 0
+    std::ostringstream s;
+    s.precision(17);
+    s << v;
+    return s.str();
+  };
+  std::string layers;
+  for (const double y : {0.0, 0.5, 1.0})
+    layers += std::string(layers.empty() ? "" : ", ") +
+              R"({"type": "displaced", "displacement": [)" + text(g * y) +
+              R"(, 0, 0], "nodes": {"box": {"lo": [-1, )" + std::to_string(y - 0.1) +
+              R"(, -1], "hi": [2, )" + std::to_string(y + 0.1) + R"(, 2]}}})";
+  return "boundary=[" + layers + "]";
+}
+
+// The unit cube with every node moved by simple shear (shear_layers): F = I + g e_x e_y^T in
+// every tet exactly, sigma = P F^T (J = 1) with the
 // hand-derived P, and ln V = asinh(g/2) / sqrt(1 + g^2/4) [[g/2, 1, 0], [1, -g/2, 0], [0, 0, 0]]
 // (derived in tests/integrators/test_element_fields.cpp). Only round-off separates them: 1e-10.
 TEST(RunScene, SimpleShearStressReadBackMatchesTheClosedForm) {
   const double g = 0.4, c = std::asinh(g / 2) / std::sqrt(1 + g * g / 4);
   Mat3 log_v = Mat3::Zero();
   log_v.topLeftCorner<2, 2>() << c * g / 2, c, c, -c * g / 2;
-  std::string layers;
-  for (const double y : {0.0, 0.5, 1.0})
-    layers += std::string(layers.empty() ? "" : ", ") +
-              R"({"type": "displaced", "displacement": [)" + std::to_string(g * y) +
-              R"(, 0, 0], "nodes": {"box": {"lo": [-1, )" + std::to_string(y - 0.1) +
-              R"(, -1], "hi": [2, )" + std::to_string(y + 0.1) + R"(, 2]}}})";
   const auto check = [&](const std::string& material_json, const auto& model) {
     SCOPED_TRACE(material_json);
     const TemporaryResults out("run_scene");
-    const RunResult r = run(load("uniaxial_block", {"bodies.0.material=" + material_json,
-                                                    "boundary=[" + layers + "]", kAllFields}),
-                            out.path);
+    const RunResult r = run(
+        load("uniaxial_block", {"bodies.0.material=" + material_json, shear_layers(g), kAllFields}),
+        out.path);
     ASSERT_TRUE(r.success) << r.message;
     Mat3 F = Mat3::Identity();
     F(0, 1) = g;
@@ -106,6 +137,45 @@ TEST(RunScene, SimpleShearStressReadBackMatchesTheClosedForm) {
   check(R"({"model": "neo_hookean", "mu": 10000, "lambda": 40000})", NeoHookean{1e4, 4e4});
   check(R"({"model": "mooney_rivlin", "C1": 4000, "C2": 1000, "a": 20000})",
         MooneyRivlin{4e3, 1e3, 2e4});
+}
+
+// A viscoelastic cube sheared at the constant rate g' (g = 1e-6 at t = 1 s; every node prescribed,
+// shear_layers) with one Prony term: the viscous shear stress is
+//   q(t) = mu beta tau g' (1 - e^-t/tau),
+// which Simo's recursion gives exactly for a strain linear in time (at small strain: 1e-6). The
+// step's dissipated energy is, per its definition (viscoelastic_history.hpp) for a simple shear
+// with Q = q (e_x e_y^T + e_y e_x^T) and dE_xy = dg / 2,
+//   V [(q_n + q_n+1) / 2 dg - (q_n+1^2 - q_n^2) / (2 beta mu)].
+TEST(RunScene, ViscousStressAndDissipationOfAShearRateReadBack) {
+  const double g = 1e-6, mu = 1e4, beta = 0.4, tau = 0.3, dt = 0.1;
+  const TemporaryResults out("run_scene");
+  const RunResult r =
+      run(load("uniaxial_block",
+               {R"(bodies.0.material={"model": "neo_hookean", "mu": 10000, "lambda": 40000,
+                "viscoelastic": {"relaxation_times": [0.3], "weights": [0.4]}})",
+                shear_layers(g), "analysis=dynamic",
+                R"(dynamic={"integrator": "newmark", "time_step": 0.1, "duration": 1})"}),
+          out.path);
+  ASSERT_TRUE(r.success) << r.message;
+  ASSERT_EQ(r.steps.size(), 10u);
+  double q_before = 0;
+  for (Index k = 0; k < 10; ++k) {
+    const double t = (k + 1) * dt, q = mu * beta * tau * g * (1 - std::exp(-t / tau));
+    const Eigen::MatrixXd viscous = read_step_dataset(out.path, k, "viscous_stress");
+    ASSERT_EQ(viscous.cols(), 6);
+    for (Index e = 0; e < viscous.rows(); ++e) {
+      EXPECT_NEAR(viscous(e, 3), q, 1e-6 * q) << "step " << k << " tet " << e;  // xy
+      EXPECT_LE(viscous.row(e).cwiseAbs().maxCoeff(), q * (1 + 1e-6));
+    }
+    const double dissipated =
+        (q_before + q) / 2 * g * dt - (q * q - q_before * q_before) / (2 * beta * mu);
+    EXPECT_NEAR(read_step_dataset(out.path, k, "dissipated_energy")(0, 0), dissipated,
+                1e-5 * std::abs(dissipated))
+        << "step " << k;
+    EXPECT_EQ(*r.steps[k].dissipated_energy,
+              read_step_dataset(out.path, k, "dissipated_energy")(0, 0));
+    q_before = q;
+  }
 }
 
 // The output section chooses what each step holds; contact fields need contact, velocities a

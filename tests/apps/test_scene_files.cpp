@@ -130,7 +130,7 @@ TEST_F(SceneFileTest, TimeIntegrationSettingsAreChecked) {
   };
   EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "rk4", "time_step": 1, "duration": 1})"))
                 .find("dynamic.integrator: unknown integrator 'rk4' (expected implicit_euler, "
-                      "newmark, symplectic_euler or arkode)"),
+                      "newmark, generalized_alpha, symplectic_euler, arkode or arkode_dirk)"),
             std::string::npos);
   EXPECT_NE(error(kValid, set("quasistatic", R"({"time_step": 1, "duration": 1})"))
                 .find("dynamic.viscosity: missing"),
@@ -169,6 +169,24 @@ TEST_F(SceneFileTest, TimeIntegrationSettingsAreChecked) {
                                              "mass": "consistent"})"))
                 .find("dynamic.mass: a consistent mass matrix needs an implicit integrator"),
             std::string::npos);
+  // The new integrators' settings: each "dynamic" section (time_step and duration 1) and the
+  // message that locates its error.
+  const std::pair<const char*, const char*> integrator_errors[] = {
+      {R"("integrator": "generalized_alpha", "generalized_alpha": {"rho_inf": 2})",
+       "dynamic.generalized_alpha.rho_inf: must be in [0, 1]"},
+      {R"("integrator": "newmark", "generalized_alpha": {})",
+       "dynamic.generalized_alpha: only for \"integrator\": \"generalized_alpha\""},
+      {R"("integrator": "arkode_dirk", "arkode": {"order": 8})",
+       "dynamic.arkode.order: must be 2, 3, 4 or 5 for arkode_dirk"},
+      {R"("integrator": "arkode_dirk", "mass": "consistent")",
+       "dynamic.mass: arkode_dirk takes the lumped mass matrix"}};
+  for (const auto& [section, message] : integrator_errors) {
+    const std::string d = std::string(R"({"time_step": 1, "duration": 1, )") + section + "}";
+    EXPECT_NE(error(kValid, set("dynamic", d)).find(message), std::string::npos) << section;
+  }
+  EXPECT_NE(
+      error(kValid, {parse_override(R"(output={"every": 0})")}).find("output.every: must be >= 1"),
+      std::string::npos);
 }
 
 TEST_F(SceneFileTest, MooneyRivlinTakesYoungsModulusAndPoissonsRatio) {
@@ -198,6 +216,46 @@ TEST_F(SceneFileTest, FormulationChoosesHowTetsTakeTheVolumeChange) {
                                              "formulation": "nodal_pressure"})")})
                 .find("bodies[0].material.poisson: Poisson's ratio must be in (-1, 0.5)"),
             std::string::npos);
+  EXPECT_NE(error(kValid, {parse_override("bodies.0.material=" + nh),
+                           parse_override(R"(bodies.0.material.viscoelastic={"relaxation_times":
+                                             [1], "weights": [0.5]})")})
+                .find("bodies[0].material.viscoelastic: needs \"formulation\": \"standard\""),
+            std::string::npos);
+}
+
+TEST_F(SceneFileTest, ViscoelasticMaterialsTakeAPronySeries) {
+  const auto ve = [](const std::string& section) {
+    return std::vector<Override>{parse_override("bodies.0.material.viscoelastic=" + section)};
+  };
+  const Scene s = load_scene(
+      write(kValid),
+      ve(R"({"relaxation_times": [0.1, 2], "weights": [0.3, 0.2], "static_modulus": "instantaneous"})"));
+  const PronySeries& p = s.groups.at(0).viscoelastic;
+  EXPECT_EQ(p.times, (std::vector<double>{0.1, 2}));
+  EXPECT_EQ(p.weights, (std::vector<double>{0.3, 0.2}));
+  EXPECT_FALSE(p.static_relaxed);
+  EXPECT_EQ(s.elasticity.duration, 0.0);  // static: no time
+  EXPECT_TRUE(load_scene(write(kValid), ve(R"({"relaxation_times": [1], "weights": [0.5]})"))
+                  .groups.at(0)
+                  .viscoelastic.static_relaxed);
+  // Each bad section with the start of its one-line error.
+  const std::pair<const char*, const char*> bad[] = {
+      {R"({"relaxation_times": [0.1, -1], "weights": [0.2, 0.3]})",
+       "relaxation_times[1]: is -1 s; each relaxation time must be > 0"},
+      {R"({"relaxation_times": [0.1], "weights": [0]})",
+       "weights[0]: is 0; each weight must be > 0"},
+      {R"({"relaxation_times": [0.1, 1], "weights": [0.7, 0.4]})",
+       "weights: they sum to 1.1; they must sum to less than 1"},
+      {R"({"relaxation_times": [0.1], "weights": [0.2, 0.1]})",
+       "weights: 2 weights for 1 relaxation times"},
+      {R"({"relaxation_times": [], "weights": []})",
+       "relaxation_times: expected a non-empty array of numbers"},
+      {R"({"relaxation_times": [1], "weights": [0.5], "tau": 1})", "tau"}};
+  for (const auto& [section, message] : bad)
+    EXPECT_NE(
+        error(kValid, ve(section)).find("bodies[0].material.viscoelastic." + std::string(message)),
+        std::string::npos)
+        << section;
 }
 
 TEST_F(SceneFileTest, OverridesReachNestedKeys) {

@@ -31,6 +31,7 @@ const std::map<std::string, std::vector<std::string>>& shortened_scenes() {
       {"buckling_column", {"solver.initial_increment=0.5", "solver.max_increment=0.5"}},
       {"cantilever_gravity", {}},
       {"falling_bars", {"dynamic.duration=0.5"}},
+      {"falling_bars_viscoelastic", {"dynamic.duration=0.5"}},
       {"fold_slab", {}},
       // The first step (d = 1 mm) on the full mesh: its factorisations (1e11 flops) are the
       // ones that differed, when they went to OpenBLAS's threads.

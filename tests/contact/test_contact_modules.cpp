@@ -5,6 +5,7 @@
 #include <tbb/task_arena.h>
 
 #include <random>
+#include <set>
 
 #include "contact/material_depth.hpp"
 #include "contact/material_depth_contact.hpp"
@@ -122,6 +123,37 @@ TEST(MaterialDepthContact, AssembledDerivativesMatchFiniteDifferences) {
   const VectorX Hv = r.hessian * v;
   const VectorX Hv_fd = testing::central_directional(module_gradient(c), as_dofs(x), v, h);
   EXPECT_LE((Hv - Hv_fd).cwiseAbs().maxCoeff(), 1e-5 * Hv.cwiseAbs().maxCoeff());
+}
+
+// Pairs of two rigid bodies, whose nodes are all prescribed, are not searched; every other pair
+// is found as without rigid bodies: three overlapping boxes, the outer two rigid.
+TEST(MaterialDepthContact, PairsOfTwoRigidBodiesAreNotSearched) {
+  Mesh m;
+  m.add_body("a", box_mesh({Vec3(0, 0, 0), Vec3(1, 1, 0.4), Eigen::Vector3i(4, 4, 2)}));
+  m.add_body("b", box_mesh({Vec3(0.2, 0.1, 0.3), Vec3(0.8, 0.7, 0.6), Eigen::Vector3i(3, 3, 2)}));
+  m.add_body("c", box_mesh({Vec3(0.1, 0.2, 0.25), Vec3(0.9, 0.6, 0.65), Eigen::Vector3i(4, 2, 2)}));
+  const auto pairs = [&](const Mesh& mesh) {
+    MaterialDepthContact c(mesh, material_depth(mesh), {1e5, true});
+    c.begin_step(mesh.X);
+    c.prepare(mesh.X);
+    std::set<std::pair<Index, Index>> out;
+    for (const ContactPair& p : c.pairs()) out.insert({p.tri, p.tet});
+    return out;
+  };
+  const auto all = pairs(m);
+  m.bodies[0].rigid = m.bodies[2].rigid = true;
+  const auto searched = pairs(m);
+  std::set<std::pair<Index, Index>> expected;
+  Index between_rigid = 0;
+  for (const auto& [tri, tet] : all) {
+    if (m.bodies[m.tri_body(tri)].rigid && m.bodies[m.tet_body(tet)].rigid)
+      ++between_rigid;
+    else
+      expected.insert({tri, tet});
+  }
+  EXPECT_GT(between_rigid, 10) << "the rigid boxes must overlap";
+  EXPECT_GT(expected.size(), 10u);
+  EXPECT_EQ(searched, expected);
 }
 
 // Energy, gradient and Hessian of a module at x on `threads` threads, into a matrix bound to it.

@@ -934,10 +934,10 @@ TEST_F(ResultsFileTest, XdmfSidecarStructure) {
     EXPECT_EQ(count("<Grid Name=\"left (neo_hookean)\" GridType=\"Uniform\">"), 3u);
     EXPECT_EQ(count("<Grid Name=\"right (rigid)\" GridType=\"Uniform\">"), 3u);
     EXPECT_EQ(count("<Grid Name=\"boundary\" GridType=\"Uniform\">"), 3u);
-    // Per step: step, load, settling, newton_iterations, linear_iterations, residual, energy,
-    // kinetic_energy, the reaction, the total contact area and three values per interface; none
-    // for the reference.
-    EXPECT_EQ(count("Center=\"Grid\""), 2u * 16);
+    // Per step: step, load, settling, newton_iterations, linear_iterations, linear_solves,
+    // factorizations, residual, energy, kinetic_energy, the reaction, the total contact area and
+    // three values per interface; none for the reference.
+    EXPECT_EQ(count("Center=\"Grid\""), 2u * 18);
     EXPECT_EQ(count("<Attribute Name=\"energy\" AttributeType=\"Scalar\" Center=\"Grid\"><DataItem "
                     "Dimensions=\"1\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">1<"),
               1u);

@@ -11,26 +11,20 @@
 #include "core/error.hpp"
 #include "core/mesh_generators.hpp"
 #include "finite_differences.hpp"
+#include "integrators/assembled.hpp"
 #include "integrators/elements/psd_projection.hpp"
 #include "integrators/elements/tet_kernel.hpp"
 #include "integrators/forces/elasticity.hpp"
-#include "integrators/module_assembly.hpp"
 #include "materials/all_models.hpp"
 #include "materials/lanes.hpp"
 
 namespace depthfem {
 namespace {
 
-ElasticGroup whole_mesh(const TetMesh& m, const MaterialModel& model, const Vec3& fiber) {
-  ElasticGroup g{model, std::vector<Index>(m.tets.rows()), Points()};
-  std::iota(g.tets.begin(), g.tets.end(), 0);
-  if (material_uses_fiber(model)) g.fibers = fiber.transpose().replicate(m.tets.rows(), 1);
-  return g;
-}
-
 using testing::assemble;
 using testing::Assembled;
 using testing::perturbed;
+using testing::whole_mesh;
 
 // Patch test: under x = A X + b every tet has F = A, so the energy is psi(A) V exactly, and
 // interior nodes are in equilibrium (their element forces cancel by the divergence theorem).
@@ -69,32 +63,14 @@ TEST(Elasticity, GradientAndHessianMatchFiniteDifferences) {
   const TetMesh m = box_mesh({Vec3::Zero(), Vec3(0.2, 0.1, 0.1), Eigen::Vector3i(2, 2, 2)});
   const Points x = perturbed(m.X, 0.01, 3);
   std::mt19937 rng(11);
-  std::normal_distribution<double> n;
   for (const MaterialModel& model : all_models()) {
     Elasticity e(m.X, m.tets, {whole_mesh(m, model, Vec3(0.3, -1, 0.5).normalized())});
     Assembled r = assemble(e, x);
     ASSERT_TRUE(std::isfinite(r.energy));
-    const double h = 1e-7;
-    const VectorX g_fd = testing::central_gradient_dofs(
-        [&](const Points& y) { return e.evaluate(y, nullptr, nullptr); }, x, h);
-    EXPECT_LE((r.gradient - g_fd).cwiseAbs().maxCoeff(), 1e-6 * r.gradient.cwiseAbs().maxCoeff())
-        << material_name(model);
-
     const Eigen::SparseMatrix<double> H = r.hessian.to_sparse();
     EXPECT_LE((Eigen::MatrixXd(H) - Eigen::MatrixXd(H).transpose()).cwiseAbs().maxCoeff(),
               1e-10 * H.coeffs().cwiseAbs().maxCoeff());
-    for (int trial = 0; trial < 3; ++trial) {
-      VectorX v(x.size());
-      for (Index i = 0; i < v.size(); ++i) v(i) = n(rng);
-      const auto gradient = [&](const VectorX& z) {
-        VectorX g = VectorX::Zero(z.size());
-        e.evaluate(as_points(z), &g, nullptr);
-        return g;
-      };
-      const VectorX Hv = H * v, Hv_fd = testing::central_directional(gradient, as_dofs(x), v, h);
-      EXPECT_LE((Hv - Hv_fd).cwiseAbs().maxCoeff(), 1e-6 * Hv.cwiseAbs().maxCoeff())
-          << material_name(model);
-    }
+    testing::expect_derivatives_match(e, x, r, rng, material_name(model));
   }
 }
 

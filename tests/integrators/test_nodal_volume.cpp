@@ -10,10 +10,10 @@
 
 #include "core/mesh_generators.hpp"
 #include "finite_differences.hpp"
+#include "integrators/assembled.hpp"
 #include "integrators/elements/element_fields.hpp"
 #include "integrators/forces/gravity.hpp"
 #include "integrators/forces/nodal_volume.hpp"
-#include "integrators/module_assembly.hpp"
 #include "integrators/solvers/newton.hpp"
 #include "materials/all_models.hpp"
 #include "materials/isochoric.hpp"

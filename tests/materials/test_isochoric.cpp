@@ -15,6 +15,17 @@ namespace {
 
 using testing::RandomState;
 
+// Runs check(F, f) at `trials` random deformation gradients and fiber directions (fixed seed).
+template <class Check>
+void at_random_states(int trials, Check check) {
+  RandomState rnd;
+  for (int trial = 0; trial < trials; ++trial) {
+    const Mat3 F = rnd.F();
+    const Vec3 f = rnd.fiber();
+    check(F, f);
+  }
+}
+
 // Runs check(Isochoric<M>{m}, name) for every model of all_models().
 template <class Check>
 void for_each_isochoric(Check check) {
@@ -27,10 +38,7 @@ void for_each_isochoric(Check check) {
 // the models themselves in test_hyperelastic.cpp).
 TEST(Isochoric, StressAndItsDerivativeMatchFiniteDifferences) {
   for_each_isochoric([](const auto& m, const std::string& name) {
-    RandomState rnd;
-    for (int trial = 0; trial < 20; ++trial) {
-      const Mat3 F = rnd.F();
-      const Vec3 f = rnd.fiber();
+    at_random_states(20, [&](const Mat3& F, const Vec3& f) {
       const Mat3 P = first_piola(m, F, f);
       const Mat3 P_fd = testing::central_gradient(
           [&](const Mat3& G) { return energy_density(m, G, f); }, F, 1e-6);
@@ -45,7 +53,7 @@ TEST(Isochoric, StressAndItsDerivativeMatchFiniteDifferences) {
                   1e-6 * D.cwiseAbs().maxCoeff())
             << name << " column " << k;
       }
-    }
+    });
   });
 }
 
@@ -54,22 +62,21 @@ TEST(Isochoric, StressAndItsDerivativeMatchFiniteDifferences) {
 // the base model's shear modulus and (models without fibers) zero small-strain bulk modulus.
 TEST(Isochoric, IsInvariantUnderDilationAndKeepsTheShearModulus) {
   for_each_isochoric([](const auto& m, const std::string& name) {
-    RandomState rnd;
-    for (int trial = 0; trial < 10; ++trial) {
-      const Mat3 F = rnd.F();
-      const Vec3 f = rnd.fiber();
+    at_random_states(10, [&](const Mat3& F, const Vec3& f) {
       const double psi = energy_density(m, F, f);
       for (double s : {0.5, 0.9, 1.7})
         EXPECT_NEAR(energy_density(m, s * F, f), psi, 1e-12 * (std::abs(psi) + 1e3)) << name;
       const Mat3 P = first_piola(m, F, f);
       EXPECT_LE(std::abs((P * F.transpose()).trace()), 1e-10 * P.norm()) << name;
-    }
+    });
     EXPECT_LE(first_piola(m, Mat3::Identity()).norm(), 1e-9) << name;
     const LinearizedModuli iso = linearized_moduli(m), full = linearized_moduli(m.base);
     EXPECT_NEAR(iso.mu, full.mu, 1e-12 * full.mu) << name;
     // linearized_moduli reads lambda off dP_00/dF_11, which an isochoric fiber term along e_x
     // also stiffens (I4~ couples the fiber stretch with J); the dilation test above covers it.
-    if (!m.kUsesFiber) EXPECT_NEAR(iso.bulk(), 0.0, 1e-9 * full.mu) << name;
+    if (!m.kUsesFiber) {
+      EXPECT_NEAR(iso.bulk(), 0.0, 1e-9 * full.mu) << name;
+    }
   });
 }
 
@@ -77,14 +84,12 @@ TEST(Isochoric, IsInvariantUnderDilationAndKeepsTheShearModulus) {
 TEST(Isochoric, SplitsTheNearlyIncompressibleMooneyRivlinExactly) {
   const NearlyIncompressibleMooneyRivlin m{4e3, 1e3, 5e5};
   const Isochoric<NearlyIncompressibleMooneyRivlin> iso{m};
-  RandomState rnd;
-  for (int trial = 0; trial < 10; ++trial) {
-    const Mat3 F = rnd.F();
+  at_random_states(10, [&](const Mat3& F, const Vec3& /*f*/) {
     const double J = F.determinant();
     const double volumetric = 0.5 * m.kappa * (0.5 * (J * J - 1) - std::log(J));
     EXPECT_NEAR(energy_density(iso, F) + volumetric, energy_density(m, F),
                 1e-12 * std::abs(energy_density(m, F)));
-  }
+  });
 }
 
 }  // namespace
