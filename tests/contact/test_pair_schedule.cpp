@@ -21,42 +21,40 @@ Pairs chain(Index first, Index count) {
   return p;
 }
 
-// The pattern of the schedule's couplings (and the diagonal of every node).
-BlockSparseMatrix pattern_of(const PairSchedule& s, Index num_nodes) {
-  SparsityBuilder builder(num_nodes);
-  for (Index i = 0; i < num_nodes; ++i) builder.add_clique(std::vector<Index>{i});
+constexpr Index kNodes = 40;
+
+// A pattern of the schedule's couplings (and the diagonal of every node), bound to it.
+BlockSparseMatrix bound_pattern(PairSchedule& s) {
+  SparsityBuilder builder(kNodes);
+  for (Index i = 0; i < kNodes; ++i) builder.add_clique(std::vector<Index>{i});
   s.add_couplings(builder);
-  return BlockSparseMatrix(builder);
+  BlockSparseMatrix H(builder);
+  s.bind(H, "test");
+  return H;
 }
 
 TEST(PairSchedule, PairsThatComeBackFindTheirBlocksInThePattern) {
-  constexpr Index kNodes = 40;
   PairSchedule s;
   const Pairs a = chain(0, 10), b = chain(5, 10);
   s.arrange(a.nodes, a.centres, kNodes, nullptr);
-  BlockSparseMatrix H = pattern_of(s, kNodes);
-  s.bind(H, "test");
+  BlockSparseMatrix H = bound_pattern(s);
   s.arrange(b.nodes, b.centres, kNodes, &H);
   EXPECT_FALSE(s.has_blocks()) << "pairs 10..14 are new";
-  H = pattern_of(s, kNodes);
-  s.bind(H, "test");
+  H = bound_pattern(s);
   EXPECT_EQ(H.num_blocks(), kNodes + 2 * 15) << "the union of both sets: pairs 0..14";
   s.arrange(a.nodes, a.centres, kNodes, &H);
   EXPECT_TRUE(s.has_blocks()) << "the first set is still in the pattern";
 }
 
 TEST(PairSchedule, KeptCliquesStartAfreshWhenTheyOutnumberTheCurrentPairsTwice) {
-  constexpr Index kNodes = 40;
   PairSchedule s;
   const Pairs a = chain(0, 10), b = chain(20, 5);
   s.arrange(a.nodes, a.centres, kNodes, nullptr);
-  BlockSparseMatrix H = pattern_of(s, kNodes);
-  s.bind(H, "test");
+  BlockSparseMatrix H = bound_pattern(s);
   s.arrange(b.nodes, b.centres, kNodes, &H);  // 15 kept, more than twice 5: only b stays
   ASSERT_FALSE(s.has_blocks());
-  H = pattern_of(s, kNodes);
+  H = bound_pattern(s);
   EXPECT_EQ(H.num_blocks(), kNodes + 2 * 5);
-  s.bind(H, "test");
   s.arrange(a.nodes, a.centres, kNodes, &H);
   EXPECT_FALSE(s.has_blocks()) << "the first set was dropped";
 }
