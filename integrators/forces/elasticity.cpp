@@ -159,8 +159,9 @@ Elasticity::Elasticity(const Points& X, const TetIndices& tets, std::vector<Elas
                          ": viscoelastic needs the standard formulation");
       }
     }
-    Group& grp = groups_.emplace_back(in.material, in.formulation,
-                                      make_tet_block(X, tets, in.tets, in.fibers));
+    Group& grp = groups_.emplace_back(Group{.material = in.material,
+                                            .formulation = in.formulation,
+                                            .block = make_tet_block(X, tets, in.tets, in.fibers)});
     if (!in.viscoelastic.empty())
       grp.history.emplace(in.viscoelastic, grp.block.size(), options_.duration > 0);
   }
