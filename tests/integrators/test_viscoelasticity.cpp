@@ -338,8 +338,9 @@ TEST(Viscoelasticity, EveryIntegratorFollowsAConstantStrainRate) {
     list.push_back({"plane", plane, Displaced{eps_rate * x * Vec3::UnitX()}});
   }
   const Constraints constraints(m.X, list);
-  for (Integrator scheme : {Integrator::kImplicitEuler, Integrator::kNewmark,
-                            Integrator::kSymplecticEuler, Integrator::kArkode}) {
+  for (Integrator scheme :
+       {Integrator::kImplicitEuler, Integrator::kNewmark, Integrator::kGeneralizedAlpha,
+        Integrator::kSymplecticEuler, Integrator::kArkode, Integrator::kArkodeDirk}) {
     PhaseTimers timers;
     System system(static_cast<Index>(m.X.rows()), timers);
     Elasticity& e = system.add(
@@ -347,7 +348,7 @@ TEST(Viscoelasticity, EveryIntegratorFollowsAConstantStrainRate) {
                                      ElasticityOptions{.duration = 1.0}));
     const VectorX mass = VectorX::Constant(m.X.rows(), 1e-3);
     NodalSpring* inertia = nullptr;
-    if (scheme == Integrator::kImplicitEuler || scheme == Integrator::kNewmark)
+    if (scheme != Integrator::kSymplecticEuler && scheme != Integrator::kArkode)
       inertia = &system.add(std::make_unique<NodalSpring>("inertia", mass));
     DynamicOptions o;
     o.integrator = scheme;
@@ -376,6 +377,7 @@ TEST(Viscoelasticity, EveryIntegratorFollowsAConstantStrainRate) {
     switch (scheme) {
       case Integrator::kImplicitEuler:
       case Integrator::kNewmark:
+      case Integrator::kGeneralizedAlpha:
         ImplicitStepper(lifecycle, {inertia, {}}, o).run(x, v);
         break;
       case Integrator::kSymplecticEuler:
@@ -383,6 +385,9 @@ TEST(Viscoelasticity, EveryIntegratorFollowsAConstantStrainRate) {
         break;
       case Integrator::kArkode:
         ArkodeStepper(lifecycle, mass, o).run(x, v);
+        break;
+      case Integrator::kArkodeDirk:
+        ArkodeStepper(lifecycle, mass, o, {inertia, {}}).run(x, v);
         break;
     }
     EXPECT_EQ(checked, 20) << int(scheme);
