@@ -61,12 +61,16 @@ grep -q "would overwrite the input" "$tmp/in.log" || fail "--out = scene: $(cat 
 cmp -s "$tmp/scene.json" "$src/apps/scenes/uniaxial_block.json" || fail "the scene was overwritten"
 
 # A second writer on the same results file is refused while the first runs, and leaves its file.
-"$exe" run "$src/apps/scenes/falling_bars.json" --out "$tmp/busy.h5" --threads 1 > "$tmp/first.log" 2>&1 &
+# The first runs 100 times its scene's duration (minutes), so that it is still writing when the
+# second starts, however loaded the machine (a finished run closes its file, which shrinks it).
+"$exe" run "$src/apps/scenes/falling_bars.json" --out "$tmp/busy.h5" --threads 1 \
+  --set dynamic.duration=200 > "$tmp/first.log" 2>&1 &
 first=$!
 for _ in $(seq 200); do grep -q "^step    0" "$tmp/first.log" && break; sleep 0.05; done
 size=$(stat -c %s "$tmp/busy.h5")
 "$exe" run "$src/apps/scenes/uniaxial_block.json" --out "$tmp/busy.h5" > /dev/null 2> "$tmp/busy.log"
 rc=$?
+kill -0 $first 2> /dev/null || fail "the first writer ended before the second was refused"
 [ "$(stat -c %s "$tmp/busy.h5")" -ge "$size" ] || fail "the second writer truncated the first's file"
 kill -9 $first 2> /dev/null; wait $first 2> /dev/null
 [ $rc -eq 1 ] || fail "a second writer must exit 1, got $rc"
