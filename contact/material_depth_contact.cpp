@@ -62,6 +62,8 @@ void MaterialDepthContact::build_trees(const Points& x) {
 
 bool MaterialDepthContact::searched(Index a, Index b) const {
   if (bodies_[a].rigid && bodies_[b].rigid) return false;
+  const std::array<Index, 2> pair = {std::min(a, b), std::max(a, b)};
+  if (std::ranges::find(options_.excluded, pair) != options_.excluded.end()) return false;
   return a != b || options_.self_contact;
 }
 
