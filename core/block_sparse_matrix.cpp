@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <iterator>
 #include <limits>
 #include <stdexcept>
 
@@ -45,13 +46,46 @@ namespace {
 std::atomic<std::uint64_t> last_pattern_version{0};
 }  // namespace
 
+SparsityBuilder::Rows SparsityBuilder::merged(const Rows& a, const Rows& b) {
+  if (a.row_begin.size() != b.row_begin.size())
+    throw std::logic_error("SparsityBuilder::merged: patterns of different node counts");
+  const size_t n = a.row_begin.size() - 1;
+  Rows out{std::vector<Index>(n + 1, 0), {}};
+  out.col.reserve(a.col.size() + b.col.size());
+  for (size_t i = 0; i < n; ++i) {
+    std::set_union(a.col.begin() + a.row_begin[i], a.col.begin() + a.row_begin[i + 1],
+                   b.col.begin() + b.row_begin[i], b.col.begin() + b.row_begin[i + 1],
+                   std::back_inserter(out.col));
+    if (out.col.size() > static_cast<size_t>(std::numeric_limits<Index>::max() / 9))
+      throw std::length_error("BlockSparseMatrix: more than 2^31 / 9 blocks");
+    out.row_begin[i + 1] = static_cast<Index>(out.col.size());
+  }
+  return out;
+}
+
 BlockSparseMatrix::BlockSparseMatrix(const SparsityBuilder& builder)
-    : pattern_version_(++last_pattern_version) {
-  // Scalar views index 9 values per block with Index (rows() refuses more).
-  SparsityBuilder::Rows rows = builder.rows();
-  row_begin_ = std::move(rows.row_begin);
-  col_ = std::move(rows.col);
+    : BlockSparseMatrix(builder.rows()) {}
+
+BlockSparseMatrix::BlockSparseMatrix(SparsityBuilder::Rows rows)
+    : row_begin_(std::move(rows.row_begin)),
+      col_(std::move(rows.col)),
+      pattern_version_(++last_pattern_version) {
+  // Scalar views index 9 values per block with Index (rows() and merged() refuse more).
   values_.assign(9 * col_.size(), 0.0);
+}
+
+std::vector<Index> BlockSparseMatrix::block_map(const BlockSparseMatrix& other) const {
+  if (other.num_nodes() != num_nodes())
+    throw std::logic_error("BlockSparseMatrix::block_map: patterns of different node counts");
+  std::vector<Index> to(col_.size(), -1);
+  for (Index i = 0; i < num_nodes(); ++i) {
+    Index k = other.row_begin_[i];
+    for (Index m = row_begin_[i]; m < row_begin_[i + 1]; ++m) {
+      while (k < other.row_begin_[i + 1] && other.col_[k] < col_[m]) ++k;
+      if (k < other.row_begin_[i + 1] && other.col_[k] == col_[m]) to[m] = k;
+    }
+  }
+  return to;
 }
 
 Index BlockSparseMatrix::block_index(Index i, Index j) const {

@@ -24,6 +24,8 @@ class SparsityBuilder {
     std::vector<Index> row_begin, col;
   };
   Rows rows() const;
+  /// The union of two patterns of the same nodes, row by row.
+  static Rows merged(const Rows& a, const Rows& b);
 
  private:
   Index num_nodes_;
@@ -41,8 +43,8 @@ enum class Triangle {
 /// matrix is its lower triangle by columns: what CHOLMOD reads.
 struct ScalarPattern {
   Triangle triangle = Triangle::kFull;
-  std::vector<Index> row_begin;  ///< 3 #nodes + 1 offsets into col
-  std::vector<Index> col;        ///< column of every entry
+  std::vector<Index> row_begin = {};  ///< 3 #nodes + 1 offsets into col
+  std::vector<Index> col = {};        ///< column of every entry
   /// Per node (or empty: none): 1 where the node's off-diagonal blocks are left out, since the
   /// matrix holds them zero (a fully prescribed node after Constraints::project).
   std::vector<char> decoupled;
@@ -62,6 +64,8 @@ class BlockSparseMatrix {
   BlockSparseMatrix() = default;
   /// Builds the pattern (values zero) from the couplings gathered in `builder`.
   explicit BlockSparseMatrix(const SparsityBuilder& builder);
+  /// Builds the pattern (values zero) from rows as SparsityBuilder::rows() gives them.
+  explicit BlockSparseMatrix(SparsityBuilder::Rows rows);
 
   /// Identifies the pattern: every pattern built gets a new version (also one with the same
   /// number of blocks); copies share it. Solvers key their per-pattern analysis on it.
@@ -71,6 +75,10 @@ class BlockSparseMatrix {
   Index num_blocks() const { return static_cast<Index>(col_.size()); }
   /// Index of block (i, j); -1 when nodes i and j are not coupled.
   Index block_index(Index i, Index j) const;
+  /// For every block of this pattern its index in `other` (of the same nodes), -1 where other
+  /// lacks it: how a module bound to this pattern moves its indices to other's (a merge of the
+  /// sorted rows, linear in the blocks).
+  std::vector<Index> block_map(const BlockSparseMatrix& other) const;
   /// Block indices of the node pairs of every row of `cliques` (#rows x K node indices): (a, b) of
   /// row r at K K r + K a + b; empty as soon as some pair of nodes is found not coupled (the
   /// search stops there). TBB-parallel over rows.

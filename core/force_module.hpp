@@ -2,6 +2,8 @@
 /// The one interface integrators see: an energy of the current positions with derivatives.
 
 #include <limits>
+#include <span>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -47,6 +49,18 @@ class ForceModule {
   /// Called whenever the global matrix pattern is (re)built: precompute scatter offsets.
   virtual void bind(const BlockSparseMatrix& /*hessian*/) {}
 
+  /// True when add_couplings() adds the same couplings all run long (the elements, not contact
+  /// pairs): the owner gathers them once and, when other modules' couplings change, moves this
+  /// module's offsets with rebind() instead of binding it anew.
+  virtual bool fixed_couplings() const { return false; }
+
+  /// After bind() (or rebind()) to a pattern P: binds to `hessian`, whose pattern holds every
+  /// coupling this module adds, block k of P now being block moved[k] (-1 for blocks of P that
+  /// `hessian` lacks, none of them this module's). Default: bind(hessian).
+  virtual void rebind(const BlockSparseMatrix& hessian, std::span<const Index> /*moved*/) {
+    bind(hessian);
+  }
+
   /// Returns E(x) [J] (+infinity where x is illegal for this module) and, when the pointers are
   /// non-null, adds grad E to `gradient` [N] and hess E into `hessian` [N/m] (after bind()).
   /// Gradient and Hessian are meaningful only where the energy is finite.
@@ -71,5 +85,15 @@ class ForceModule {
   /// the first step, so that a results file can be laid out up front.
   virtual std::vector<std::string> interface_names() const { return {}; }
 };
+
+/// Moves block indices found in one pattern to another (ForceModule::rebind): each index k
+/// becomes moved[k]. Throws std::logic_error, naming `module`, where the other pattern lacks one.
+inline void move_block_indices(std::vector<Index>& indices, std::span<const Index> moved,
+                               const std::string& module) {
+  for (Index& k : indices) {
+    k = moved[static_cast<size_t>(k)];
+    if (k < 0) throw std::logic_error(module + ": the new Hessian pattern lacks a coupling");
+  }
+}
 
 }  // namespace depthfem

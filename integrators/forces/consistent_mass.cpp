@@ -22,6 +22,10 @@ void ConsistentMass::bind(const BlockSparseMatrix& hessian) {
       global_[k] = hessian.block_index(i, M_.block_col(k));
 }
 
+void ConsistentMass::rebind(const BlockSparseMatrix&, std::span<const Index> moved) {
+  move_block_indices(global_, moved, name());
+}
+
 double ConsistentMass::evaluate(const Points& x, VectorX* gradient,
                                 BlockSparseMatrix* hessian) const {
   const VectorX d = as_dofs(x - anchor_);

@@ -18,6 +18,8 @@ class ConsistentMass final : public Tether {
   std::string name() const override { return name_; }
   void add_couplings(SparsityBuilder& builder) const override;
   void bind(const BlockSparseMatrix& hessian) override;
+  bool fixed_couplings() const override { return true; }
+  void rebind(const BlockSparseMatrix& hessian, std::span<const Index> moved) override;
   double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
   double quadratic_form(const Points& d) const override;
 

@@ -221,6 +221,10 @@ void Elasticity::bind(const BlockSparseMatrix& H) {
   }
 }
 
+void Elasticity::rebind(const BlockSparseMatrix&, std::span<const Index> moved) {
+  for (Group& grp : groups_) move_block_indices(grp.scatter, moved, name());
+}
+
 double Elasticity::evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const {
   if (hessian && !gradient) throw std::logic_error("elasticity: a Hessian needs a gradient too");
   double total = 0;

@@ -56,6 +56,8 @@ class Elasticity final : public ForceModule {
   std::string name() const override { return "elasticity"; }
   void add_couplings(SparsityBuilder& builder) const override;
   void bind(const BlockSparseMatrix& hessian) override;
+  bool fixed_couplings() const override { return true; }
+  void rebind(const BlockSparseMatrix& hessian, std::span<const Index> moved) override;
   double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
 
   /// Viscoelastic groups: the history starts at the first step's x, each step ends at time
@@ -86,8 +88,8 @@ class Elasticity final : public ForceModule {
     MaterialModel material;
     VolumeFormulation formulation;
     TetBlock block;
-    std::vector<Index> scatter;  ///< 16 block indices per row: (a, b) at 16 e + 4 a + b
-    std::optional<ViscoelasticHistory> history;  ///< viscoelastic groups only
+    std::vector<Index> scatter = {};  ///< 16 block indices per row: (a, b) at 16 e + 4 a + b
+    std::optional<ViscoelasticHistory> history = {};  ///< viscoelastic groups only
   };
   std::vector<Group> groups_;
   ElasticityOptions options_;

@@ -155,6 +155,11 @@ void NodalVolume::bind(const BlockSparseMatrix& H) {
   }
 }
 
+void NodalVolume::rebind(const BlockSparseMatrix&, std::span<const Index> moved) {
+  move_block_indices(corner_block_, moved, name());
+  move_block_indices(pair_block_, moved, name());
+}
+
 void NodalVolume::tet_volumes(const Points& x, VectorX& volume, TetGradients* gradient) const {
   const Index nt = static_cast<Index>(tet_.rows());
   volume.resize(nt);

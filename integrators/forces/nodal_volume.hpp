@@ -50,6 +50,8 @@ class NodalVolume final : public ForceModule {
   std::string name() const override { return "nodal volume"; }
   void add_couplings(SparsityBuilder& builder) const override;
   void bind(const BlockSparseMatrix& hessian) override;
+  bool fixed_couplings() const override { return true; }
+  void rebind(const BlockSparseMatrix& hessian, std::span<const Index> moved) override;
   double evaluate(const Points& x, VectorX* gradient, BlockSparseMatrix* hessian) const override;
 
   /// J_a = v_a / V_a of every node the tets touch (in increasing global node order) at x.

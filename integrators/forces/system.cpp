@@ -74,15 +74,35 @@ double System::gradient(const Points& x, VectorX& g) {
 double System::hessian(const Points& x, VectorX& g) {
   if (!pattern_valid_) {
     PhaseTimers::Scope t(timers_, "force/stiffness: pattern");
-    SparsityBuilder builder(num_nodes_);
-    for (const auto& m : modules_) m->add_couplings(builder);
-    hessian_ = BlockSparseMatrix(builder);
-    for (const auto& m : modules_) m->bind(hessian_);
-    pattern_valid_ = true;
+    rebuild_pattern();
   }
   hessian_.set_zero();
   g.setZero(3 * num_nodes_);
   return evaluate(x, &g, &hessian_);
+}
+
+void System::rebuild_pattern() {
+  if (!fixed_rows_) {
+    SparsityBuilder fixed(num_nodes_);
+    for (const auto& m : modules_)
+      if (m->fixed_couplings()) m->add_couplings(fixed);
+    fixed_rows_ = fixed.rows();
+    bound_ = false;
+  }
+  SparsityBuilder varying(num_nodes_);
+  for (const auto& m : modules_)
+    if (!m->fixed_couplings()) m->add_couplings(varying);
+  BlockSparseMatrix next(SparsityBuilder::merged(*fixed_rows_, varying.rows()));
+  const std::vector<Index> moved = bound_ ? hessian_.block_map(next) : std::vector<Index>{};
+  hessian_ = std::move(next);
+  for (const auto& m : modules_) {
+    if (bound_ && m->fixed_couplings())
+      m->rebind(hessian_, moved);
+    else
+      m->bind(hessian_);
+  }
+  bound_ = true;
+  pattern_valid_ = true;
 }
 
 }  // namespace depthfem

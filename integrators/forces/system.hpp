@@ -2,6 +2,7 @@
 /// The total energy of a scene: the sum of its force modules, with one shared Hessian.
 
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "core/force_module.hpp"
@@ -10,8 +11,10 @@
 namespace depthfem {
 
 /// Sums E, grad E and hess E over force modules and owns the global Hessian and its pattern.
-/// Module evaluation is timed as "force/stiffness: <module>", preparation as
-/// "collision detection: <module>".
+/// The couplings of the modules whose couplings are fixed (ForceModule::fixed_couplings) are
+/// gathered once; a rebuild merges them with the others' and moves the fixed modules' offsets
+/// to the new pattern (rebind) rather than searching for them again. Module evaluation is timed as
+/// "force/stiffness: <module>", preparation as "collision detection: <module>".
 class System {
  public:
   System(Index num_nodes, PhaseTimers& timers) : num_nodes_(num_nodes), timers_(timers) {}
@@ -22,6 +25,7 @@ class System {
     M& ref = *module;
     modules_.push_back(std::move(module));
     pattern_valid_ = false;
+    fixed_rows_.reset();
     return ref;
   }
 
@@ -61,8 +65,12 @@ class System {
   Index num_nodes_;
   PhaseTimers& timers_;
   std::vector<std::unique_ptr<ForceModule>> modules_;
+  void rebuild_pattern();
+
   BlockSparseMatrix hessian_;
   bool pattern_valid_ = false;
+  bool bound_ = false;  ///< every module bound to hessian_ (the next rebuild may rebind)
+  std::optional<SparsityBuilder::Rows> fixed_rows_;  ///< the fixed modules' couplings
 };
 
 }  // namespace depthfem

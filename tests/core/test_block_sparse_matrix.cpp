@@ -77,7 +77,9 @@ TEST(BlockSparseMatrix, ScalarViewsEqualTheReferenceMatrix) {
     Eigen::MatrixXd rebuilt = Eigen::MatrixXd::Zero(3 * n, 3 * n);
     for (Index r = 0; r < 3 * n; ++r)
       for (Index q = p.row_begin[r]; q < p.row_begin[r + 1]; ++q) {
-        if (q > p.row_begin[r]) EXPECT_LT(p.col[q - 1], p.col[q]) << "row " << r;
+        if (q > p.row_begin[r]) {
+          EXPECT_LT(p.col[q - 1], p.col[q]) << "row " << r;
+        }
         rebuilt(r, p.col[q]) = v[q];
       }
     const Eigen::MatrixXd expected =
@@ -97,6 +99,33 @@ TEST(BlockSparseMatrix, EveryNewPatternGetsANewVersion) {
   EXPECT_NE(A.pattern_version(), A2.pattern_version());
   const BlockSparseMatrix copy = A;
   EXPECT_EQ(copy.pattern_version(), A.pattern_version());
+}
+
+// The union of two patterns is the pattern of both sets of couplings; block_map sends every
+// block of a pattern to the same (row, column) of another, -1 where the other lacks it.
+TEST(BlockSparseMatrix, MergedPatternsAndBlockMapsKeepRowsAndColumns) {
+  const TetMesh m = box_mesh({Vec3::Zero(), Vec3::Ones(), Eigen::Vector3i(3, 2, 2)});
+  const Index n = static_cast<Index>(m.X.rows());
+  SparsityBuilder tets = tet_couplings(m), extra(n), both = tet_couplings(m);
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<Index> node(0, n - 1);
+  for (int k = 0; k < 40; ++k) {
+    const std::vector<Index> clique = {node(rng), node(rng), node(rng)};
+    extra.add_clique(clique);
+    both.add_clique(clique);
+  }
+  const SparsityBuilder::Rows merged = SparsityBuilder::merged(tets.rows(), extra.rows());
+  EXPECT_EQ(merged.row_begin, both.rows().row_begin);
+  EXPECT_EQ(merged.col, both.rows().col);
+  const BlockSparseMatrix small(tets), large(merged);
+  for (const auto& [from, to] : {std::pair(&small, &large), std::pair(&large, &small)}) {
+    const std::vector<Index> map = from->block_map(*to);
+    ASSERT_EQ(map.size(), static_cast<size_t>(from->num_blocks()));
+    for (Index i = 0; i < n; ++i)
+      for (Index k = from->row_begin(i); k < from->row_begin(i + 1); ++k)
+        EXPECT_EQ(map[k], to->block_index(i, from->block_col(k)));
+  }
+  EXPECT_LT(small.num_blocks(), large.num_blocks()) << "the extra cliques must add blocks";
 }
 
 // The block indices of element cliques, found in bulk, are those of single look-ups, and adding a

@@ -195,6 +195,72 @@ TEST(System, RebuildsThePatternWhenAModulesCouplingsChange) {
   EXPECT_GE(system.matrix().block_index(0, 3), 0);
 }
 
+// Pair springs whose couplings are fixed: bound once, then moved to each new pattern.
+class FixedSprings final : public ForceModule {
+ public:
+  explicit FixedSprings(std::unique_ptr<PairSprings> springs) : springs_(std::move(springs)) {}
+  std::string name() const override { return "fixed springs"; }
+  bool fixed_couplings() const override { return true; }
+  void add_couplings(SparsityBuilder& builder) const override { springs_->add_couplings(builder); }
+  void bind(const BlockSparseMatrix& H) override {
+    ++binds;
+    springs_->bind(H);
+  }
+  void rebind(const BlockSparseMatrix& H, std::span<const Index> moved) override {
+    ++rebinds;
+    moved_ = std::vector<Index>(moved.begin(), moved.end());
+    springs_->bind(H);  // the reference: indices found anew, compared with the moved ones below
+  }
+  double evaluate(const Points& x, VectorX* g, BlockSparseMatrix* H) const override {
+    return springs_->evaluate(x, g, H);
+  }
+  int binds = 0, rebinds = 0;
+  std::vector<Index> moved_;
+
+ private:
+  std::unique_ptr<PairSprings> springs_;
+};
+
+// A rebuild for the latch binds the fixed springs once and then moves them: every block of the
+// pattern before lands on the same (row, column) in the new one (-1 only for the latch's
+// coupling when it goes), and the Hessian equals that of a system built afresh, bit for bit.
+TEST(System, FixedCouplingsAreBoundOnceAndMovedToEachNewPattern) {
+  PhaseTimers timers;
+  System system(4, timers);
+  FixedSprings& fixed = system.add(std::make_unique<FixedSprings>(pairs()));
+  system.add(std::make_unique<Latch>(1, 2, 23.0));
+  VectorX g;
+  Points x = reference();
+  x(3, 2) += 0.1;
+  int rebuilds = 0;
+  for (const double x1 : {1.2, 0.9, 1.3}) {  // engage, release, engage
+    const BlockSparseMatrix before = system.matrix();
+    x(1, 0) = x1;
+    system.prepare(x);
+    system.hessian(x, g);
+    const BlockSparseMatrix& now = system.matrix();
+    if (before.num_nodes() == now.num_nodes()) {
+      ++rebuilds;
+      ASSERT_EQ(fixed.moved_.size(), static_cast<size_t>(before.num_blocks()));
+      for (Index i = 0; i < before.num_nodes(); ++i)
+        for (Index k = before.row_begin(i); k < before.row_begin(i + 1); ++k)
+          EXPECT_EQ(fixed.moved_[k], now.block_index(i, before.block_col(k)));
+    }
+    PhaseTimers fresh_timers;
+    System fresh(4, fresh_timers);
+    fresh.add(std::make_unique<FixedSprings>(pairs()));
+    fresh.add(std::make_unique<Latch>(1, 2, 23.0));
+    VectorX fresh_g;
+    fresh.prepare(x);
+    fresh.hessian(x, fresh_g);
+    EXPECT_EQ(Eigen::MatrixXd(now.to_sparse()), Eigen::MatrixXd(fresh.matrix().to_sparse()));
+    EXPECT_EQ(g, fresh_g);
+  }
+  EXPECT_EQ(fixed.binds, 1);
+  EXPECT_EQ(fixed.rebinds, rebuilds);
+  EXPECT_EQ(rebuilds, 2);  // the first Hessian built the pattern; two more rebuilt it
+}
+
 TEST(System, MaxStepIsTheSmallestOfTheModules) {
   const Points x = reference(), dx = Points::Ones(4, 3);
   PhaseTimers timers;
