@@ -25,6 +25,8 @@ STYLE = {  # integrator -> (colour, marker)
     "arkode_dirk2": ("tab:cyan", "<"),
     "arkode_dirk3": ("tab:olive", ">"),
     "arkode_dirk4": ("tab:gray", "h"),
+    "cvode_bdf2": ("black", "*"),
+    "cvode_bdf5": ("gold", "p"),
 }
 
 
