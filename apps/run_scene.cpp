@@ -15,9 +15,9 @@
 #include "core/error.hpp"
 #include "core/results_file.hpp"
 #include "integrators/elements/element_fields.hpp"
-#include "integrators/solvers/arkode_stepper.hpp"
 #include "integrators/solvers/implicit_stepper.hpp"
 #include "integrators/solvers/static_solver.hpp"
+#include "integrators/solvers/sundials_stepper.hpp"
 #include "integrators/solvers/symplectic_euler.hpp"
 #include "integrators/solvers/thread_budget.hpp"
 
@@ -142,7 +142,8 @@ void drive(const Scene& scene, SceneModel& model, StepLifecycle& lifecycle, doub
           ImplicitStepper(lifecycle, model.implicit, dyn).run(result.x, v);
           break;
         case Integrator::kArkodeDirk:
-          ArkodeStepper(lifecycle, model.lumped_mass, dyn, model.implicit).run(result.x, v);
+        case Integrator::kCvodeBdf:
+          SundialsStepper(lifecycle, model.lumped_mass, dyn, model.implicit).run(result.x, v);
           break;
         case Integrator::kSymplecticEuler:
           SymplecticEuler(
@@ -151,7 +152,7 @@ void drive(const Scene& scene, SceneModel& model, StepLifecycle& lifecycle, doub
               .run(result.x, v);
           break;
         case Integrator::kArkode:
-          ArkodeStepper(lifecycle, model.lumped_mass, dyn).run(result.x, v);
+          SundialsStepper(lifecycle, model.lumped_mass, dyn).run(result.x, v);
           break;
       }
     }

@@ -473,12 +473,28 @@ Obstacle read_obstacle(JsonObject o, size_t index) {
   return out;
 }
 
-// The options of one integrator ("newmark": {...}, "arkode": {...}), keyed by its name; an
-// error when the scene chose another integrator.
-std::optional<JsonObject> integrator_section(JsonObject& d, const char* integrator, bool chosen) {
-  if (!d.has(integrator)) return std::nullopt;
-  if (!chosen) d.fail(integrator, std::string("only for \"integrator\": \"") + integrator + "\"");
-  return d.object(integrator);
+// The options of one integrator ("newmark": {...}, "arkode": {...}), keyed by its name or by
+// its package's (`users`: the integrators that read it, for the message); an error when the
+// scene chose another integrator.
+std::optional<JsonObject> integrator_section(JsonObject& d, const char* key, bool chosen,
+                                             const char* users = nullptr) {
+  if (!d.has(key)) return std::nullopt;
+  if (!chosen) {
+    d.fail(key, std::string("only for \"integrator\": ") +
+                    (users ? users : "\"" + std::string(key) + "\""));
+  }
+  return d.object(key);
+}
+
+// The error control of a SUNDIALS section ("arkode", "cvode"), then the end of the section.
+void read_error_control(JsonObject& s, ErrorControl& c) {
+  c.relative_tolerance = s.number("relative_tolerance", c.relative_tolerance);
+  c.absolute_tolerance = s.number("absolute_tolerance", c.absolute_tolerance);
+  c.max_steps = s.integer("max_steps", static_cast<int>(c.max_steps));
+  if (!(c.relative_tolerance > 0)) s.fail("relative_tolerance", "must be > 0");
+  if (!(c.absolute_tolerance > 0)) s.fail("absolute_tolerance", "must be > 0");
+  if (!(c.max_steps > 0)) s.fail("max_steps", "must be > 0");
+  s.finish();
 }
 
 void read_dynamic(JsonObject d, Scene& scene) {
@@ -489,7 +505,8 @@ void read_dynamic(JsonObject d, Scene& scene) {
                                        {"generalized_alpha", Integrator::kGeneralizedAlpha},
                                        {"symplectic_euler", Integrator::kSymplecticEuler},
                                        {"arkode", Integrator::kArkode},
-                                       {"arkode_dirk", Integrator::kArkodeDirk}});
+                                       {"arkode_dirk", Integrator::kArkodeDirk},
+                                       {"cvode_bdf", Integrator::kCvodeBdf}});
   o.time_step = d.number("time_step");
   o.duration = d.number("duration");
   if (!(o.time_step > 0)) d.fail("time_step", "must be > 0");
@@ -515,8 +532,12 @@ void read_dynamic(JsonObject d, Scene& scene) {
       {{"lumped", MassMatrix::kLumped}, {"consistent", MassMatrix::kConsistent}});
   if (o.mass == MassMatrix::kConsistent && explicit_scheme)
     d.fail("mass", "a consistent mass matrix needs an implicit integrator");
-  if (o.mass == MassMatrix::kConsistent && o.integrator == Integrator::kArkodeDirk)
-    d.fail("mass", "arkode_dirk takes the lumped mass matrix");
+  if (o.mass == MassMatrix::kConsistent &&
+      (o.integrator == Integrator::kArkodeDirk || o.integrator == Integrator::kCvodeBdf)) {
+    d.fail("mass",
+           std::string(o.integrator == Integrator::kCvodeBdf ? "cvode_bdf" : "arkode_dirk") +
+               " takes the lumped mass matrix");
+  }
   if (std::optional<JsonObject> section =
           integrator_section(d, "newmark", o.integrator == Integrator::kNewmark)) {
     JsonObject& n = *section;
@@ -546,21 +567,23 @@ void read_dynamic(JsonObject d, Scene& scene) {
   }
   if (std::optional<JsonObject> section = integrator_section(
           d, "arkode",
-          o.integrator == Integrator::kArkode || o.integrator == Integrator::kArkodeDirk)) {
+          o.integrator == Integrator::kArkode || o.integrator == Integrator::kArkodeDirk,
+          "\"arkode\" or \"arkode_dirk\"")) {
     JsonObject& a = *section;
     o.arkode.order = a.integer("order", o.arkode.order);
-    o.arkode.relative_tolerance = a.number("relative_tolerance", o.arkode.relative_tolerance);
-    o.arkode.absolute_tolerance = a.number("absolute_tolerance", o.arkode.absolute_tolerance);
-    o.arkode.max_steps = a.integer("max_steps", static_cast<int>(o.arkode.max_steps));
     o.arkode.fixed_step = a.boolean("fixed_step", o.arkode.fixed_step);
     if (o.integrator == Integrator::kArkode && !has_erk_table(o.arkode.order))
       a.fail("order", "must be 2, 3, 4, 5, 6 or 8");
     if (o.integrator == Integrator::kArkodeDirk && !has_dirk_table(o.arkode.order))
       a.fail("order", "must be 2, 3, 4 or 5 for arkode_dirk");
-    if (!(o.arkode.relative_tolerance > 0)) a.fail("relative_tolerance", "must be > 0");
-    if (!(o.arkode.absolute_tolerance > 0)) a.fail("absolute_tolerance", "must be > 0");
-    if (!(o.arkode.max_steps > 0)) a.fail("max_steps", "must be > 0");
-    a.finish();
+    read_error_control(a, o.arkode);
+  }
+  if (std::optional<JsonObject> section =
+          integrator_section(d, "cvode", o.integrator == Integrator::kCvodeBdf, "\"cvode_bdf\"")) {
+    JsonObject& c = *section;
+    o.cvode.max_order = c.integer("max_order", o.cvode.max_order);
+    if (!(o.cvode.max_order >= 1 && o.cvode.max_order <= 5)) c.fail("max_order", "must be 1 to 5");
+    read_error_control(c, o.cvode);
   }
   d.finish();
 }

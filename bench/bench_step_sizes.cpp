@@ -1,4 +1,4 @@
-// The step-size history of ARKODE's error-controlled steppers through a scene: every internal
+// The step-size history of SUNDIALS' error-controlled steppers through a scene: every internal
 // step's time and size, and per output interval the Newton work and the contact force, as two
 // CSV files. Shows what the onset of contact does to the step-size control (bars_drop).
 //
@@ -6,7 +6,7 @@
 //
 // writes PREFIX_steps.csv (time_s, step_s) and PREFIX_intervals.csv (time_s, newton_iterations,
 // linear_solves, factorizations, contact_force_n, wall_s). The scene must choose integrator
-// arkode or arkode_dirk (--set dynamic.integrator=arkode_dirk). Plot with
+// arkode, arkode_dirk or cvode_bdf (--set dynamic.integrator=arkode_dirk). Plot with
 // bench/plot_step_sizes.py.
 #include <fstream>
 #include <iostream>
@@ -16,7 +16,7 @@
 #include "apps/scene.hpp"
 #include "apps/scene_model.hpp"
 #include "core/error.hpp"
-#include "integrators/solvers/arkode_stepper.hpp"
+#include "integrators/solvers/sundials_stepper.hpp"
 #include "integrators/solvers/thread_budget.hpp"
 
 using namespace depthfem;
@@ -45,8 +45,11 @@ int main(int argc, char** argv) {
     const ThreadBudget budget(1);
     const Scene scene = load_scene(scene_path, overrides);
     const Integrator integrator = scene.dynamic_options.integrator;
-    if (integrator != Integrator::kArkode && integrator != Integrator::kArkodeDirk)
-      throw InputError(scene_path + ": dynamic.integrator must be arkode or arkode_dirk");
+    if (integrator != Integrator::kArkode && integrator != Integrator::kArkodeDirk &&
+        integrator != Integrator::kCvodeBdf) {
+      throw InputError(scene_path +
+                       ": dynamic.integrator must be arkode, arkode_dirk or cvode_bdf");
+    }
     PhaseTimers timers;
     const std::unique_ptr<SceneModel> model = build_model(scene, timers);
     std::ofstream intervals(prefix + "_intervals.csv");
@@ -59,7 +62,7 @@ int main(int argc, char** argv) {
                                         << s.linear_solves << "," << s.factorizations << ","
                                         << force << "," << s.seconds << "\n";
                             });
-    ArkodeStepper stepper(lifecycle, model->lumped_mass, model->dynamic_options, model->implicit);
+    SundialsStepper stepper(lifecycle, model->lumped_mass, model->dynamic_options, model->implicit);
     Points x = scene.mesh.X, v = scene.initial_velocity;
     std::string failure;
     try {
@@ -69,7 +72,8 @@ int main(int argc, char** argv) {
     }
     std::ofstream steps(prefix + "_steps.csv");
     steps << "time_s,step_s\n";
-    for (const ArkodeInternalStep& s : stepper.history()) steps << s.time << "," << s.size << "\n";
+    for (const SundialsInternalStep& s : stepper.history())
+      steps << s.time << "," << s.size << "\n";
     std::cout << stepper.history().size() << " internal steps, " << lifecycle.completed()
               << " output intervals" << (failure.empty() ? "" : "; failed: " + failure) << "\n";
     return failure.empty() ? 0 : 1;

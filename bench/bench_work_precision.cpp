@@ -1,15 +1,21 @@
-// Work-precision study on falling_bars: every time integrator at a ladder of step sizes (or
-// tolerances for ARKODE's explicit and diagonally implicit methods); error = largest distance, over
-// the output times (every 10 ms) and the tip nodes of the three bars, from a reference run of
-// ARKODE's 8th-order method at a relative tolerance of 1e-11; work = wall time of the run.
+// Work-precision study on falling_bars (or another scene): every time integrator at a ladder of
+// step sizes (or tolerances for ARKODE's explicit and diagonally implicit methods and CVODE's BDF);
+// error = largest distance, over the output times (every 10 ms) and the tip nodes of the three
+// bars (with --all-nodes: every node), from a reference run of ARKODE's 8th-order method at a
+// relative tolerance of 1e-11 (with --bdf-reference: CVODE's BDF up to order 5 at 1e-7, for
+// scenes with contact, where an explicit stage can invert an element and ERKStep cannot retry);
+// work = wall time of the run.
 //
 //   build/bench/bench_work_precision [--out bench/results/work_precision.csv] [--duration 2.0]
-//                                    [--set PATH=VALUE ...]
+//                                    [--scene apps/scenes/falling_bars.json] [--all-nodes]
+//                                    [--only NAME,...] [--bdf-reference] [--set PATH=VALUE ...]
 //
-// --set overrides scene keys as in `depthfem run` (e.g. stiffer bars for a second study).
+// --set overrides scene keys as in `depthfem run` (e.g. stiffer bars for a second study); --only
+// runs the integrators whose row names start with one of the given names (the references
+// always).
 // Plot with bench/plot_work_precision.py. A second, independent reference (ARKODE order 5 at
-// 1e-10) is run too: its distance from the first is printed and written as the row
-// "reference_check", a bound on the reference error.
+// 1e-10; with --bdf-reference ARKStep's DIRK order 4 at 1e-6) is run too: its distance from the
+// first is printed and written as the row "reference_check", a bound on the reference error.
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -37,20 +43,24 @@ struct Trajectory {
   std::string failure;
 };
 
+bool all_nodes = false;  // the error over every node, not the bars' tips
+
 Trajectory run_case(const std::string& scene_path, std::vector<Override> o,
                     const std::vector<std::string>& overrides) {
   for (const std::string& s : overrides) o.push_back(parse_override(s));
   const Scene scene = load_scene(scene_path, o);
   std::vector<Index> tip;
   for (Index i = 0; i < scene.mesh.num_nodes(); ++i)
-    if (std::abs(scene.mesh.X(i, 0) - 1.0) < 1e-9) tip.push_back(i);
+    if (all_nodes || std::abs(scene.mesh.X(i, 0) - 1.0) < 1e-9) tip.push_back(i);
   Trajectory t;
-  const bool explicit_rk = scene.dynamic_options.integrator == Integrator::kArkode;
-  const bool dirk = scene.dynamic_options.integrator == Integrator::kArkodeDirk;
+  const Integrator integrator = scene.dynamic_options.integrator;
+  const bool explicit_rk = integrator == Integrator::kArkode;
+  const bool adaptive_implicit =
+      integrator == Integrator::kArkodeDirk || integrator == Integrator::kCvodeBdf;
   RunOptions options;
   options.threads = 1;
   options.observer = [&](const StepRecord& s, const Points& x) {
-    t.steps += explicit_rk ? s.newton_iterations : dirk ? 0 : 1;
+    t.steps += explicit_rk ? s.newton_iterations : adaptive_implicit ? 0 : 1;
     if (!explicit_rk) t.newton += s.newton_iterations;
     t.linear_solves += s.linear_solves;
     t.factorizations += s.factorizations;
@@ -91,22 +101,34 @@ std::string number(double v) {
 int main(int argc, char** argv) {
   std::string out = "bench/results/work_precision.csv";
   double duration = 2.0;
+  std::string scene = std::string(DEPTHFEM_SOURCE_DIR) + "/apps/scenes/falling_bars.json";
+  std::vector<std::string> only;
+  bool bdf_reference = false;
   std::vector<Override> scene_overrides;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--out" && i + 1 < argc) {
       out = argv[++i];
+    } else if (a == "--scene" && i + 1 < argc) {
+      scene = argv[++i];
+    } else if (a == "--all-nodes") {
+      all_nodes = true;
+    } else if (a == "--bdf-reference") {
+      bdf_reference = true;
+    } else if (a == "--only" && i + 1 < argc) {
+      std::stringstream list(argv[++i]);
+      for (std::string name; std::getline(list, name, ',');) only.push_back(name);
     } else if (a == "--duration" && i + 1 < argc) {
       duration = std::stod(argv[++i]);
     } else if (a == "--set" && i + 1 < argc) {
       scene_overrides.push_back(parse_override(argv[++i]));
     } else {
-      std::cerr << "usage: bench_work_precision [--out FILE.csv] [--duration SECONDS] [--set "
+      std::cerr << "usage: bench_work_precision [--out FILE.csv] [--duration SECONDS] [--scene "
+                   "SCENE.json] [--all-nodes] [--only NAME,...] [--bdf-reference] [--set "
                    "PATH=VALUE ...]\n";
       return 2;
     }
   }
-  const std::string scene = std::string(DEPTHFEM_SOURCE_DIR) + "/apps/scenes/falling_bars.json";
   const std::string span = "dynamic.duration=" + number(duration);
   const auto arkode = [&](int order, double rtol) {
     return std::vector<std::string>{span, "dynamic.time_step=0.01", "dynamic.integrator=arkode",
@@ -124,9 +146,25 @@ int main(int argc, char** argv) {
     o[2] = "dynamic.integrator=arkode_dirk";
     return o;
   };
+  // CVODE's BDF up to order `q`, error-controlled at rtol (atol rtol / 100).
+  const auto bdf = [&](int q, double rtol) {
+    return std::vector<std::string>{span, "dynamic.time_step=0.01", "dynamic.integrator=cvode_bdf",
+                                    "dynamic.cvode={\"max_order\": " + std::to_string(q) +
+                                        ", \"relative_tolerance\": " + number(rtol) +
+                                        ", \"absolute_tolerance\": " + number(rtol * 1e-2) + "}"};
+  };
+  const auto wanted = [&](const std::string& name) {
+    if (only.empty()) return true;
+    for (const std::string& o : only)
+      if (name.rfind(o, 0) == 0) return true;
+    return false;
+  };
 
-  std::cout << "reference: ARKODE order 8, relative tolerance 1e-11 ..." << std::endl;
-  const Trajectory ref = run_case(scene, scene_overrides, arkode(8, 1e-11));
+  std::cout << (bdf_reference ? "reference: CVODE BDF up to order 5, relative tolerance 1e-7 ..."
+                              : "reference: ARKODE order 8, relative tolerance 1e-11 ...")
+            << std::endl;
+  const Trajectory ref =
+      run_case(scene, scene_overrides, bdf_reference ? bdf(5, 1e-7) : arkode(8, 1e-11));
   if (!ref.failure.empty()) {
     std::cerr << "bench_work_precision: the reference run failed: " << ref.failure << "\n";
     return 1;
@@ -138,8 +176,11 @@ int main(int argc, char** argv) {
   }
   csv << "integrator,setting,value,steps,newton_iterations,linear_solves,factorizations,wall_s,"
          "max_tip_error_m,status\n";
+  // One row: the integrator `name` run with `overrides` (skipped unless wanted).
   const auto row = [&](const std::string& name, const std::string& setting, double value,
-                       const Trajectory& t) {
+                       const std::vector<std::string>& overrides) {
+    if (!wanted(name) && name != "reference_check") return;
+    const Trajectory t = run_case(scene, scene_overrides, overrides);
     const double err = max_distance(t, ref);
     csv << name << "," << setting << "," << value << "," << t.steps << "," << t.newton << ","
         << t.linear_solves << "," << t.factorizations << "," << t.seconds << "," << err << ","
@@ -148,19 +189,25 @@ int main(int argc, char** argv) {
     std::printf("%-18s %-9s %-9g steps %7ld  newton %6ld  %8.3f s  error %.3e m %s\n", name.c_str(),
                 setting.c_str(), value, t.steps, t.newton, t.seconds, err, t.failure.c_str());
   };
-  row("reference_check", "rtol", 1e-10, run_case(scene, scene_overrides, arkode(5, 1e-10)));
+  if (bdf_reference) {
+    row("reference_check", "rtol", 1e-6, dirk(4, 1e-6));
+  } else {
+    row("reference_check", "rtol", 1e-10, arkode(5, 1e-10));
+  }
   for (double h : {0.01, 0.005, 0.0025, 0.00125, 0.000625}) {
-    row("implicit_euler", "h", h, run_case(scene, scene_overrides, stepped("implicit_euler", h)));
-    row("newmark", "h", h, run_case(scene, scene_overrides, stepped("newmark", h)));
+    row("implicit_euler", "h", h, stepped("implicit_euler", h));
+    row("newmark", "h", h, stepped("newmark", h));
     std::vector<std::string> alpha = stepped("generalized_alpha", h);
     alpha.push_back(R"(dynamic.generalized_alpha={"rho_inf": 0.8})");
-    row("generalized_alpha", "h", h, run_case(scene, scene_overrides, alpha));
+    row("generalized_alpha", "h", h, alpha);
   }
   for (int order : {2, 3, 4})
     for (double rtol : {1e-2, 1e-3, 1e-4, 1e-5, 1e-6})
       if (order > 2 || rtol >= 1e-4)  // second order: its order-1 embedding asks ~10x the steps
-        row("arkode_dirk" + std::to_string(order), "rtol", rtol,
-            run_case(scene, scene_overrides, dirk(order, rtol)));
+        row("arkode_dirk" + std::to_string(order), "rtol", rtol, dirk(order, rtol));
+  for (int q : {2, 5})
+    for (double rtol : {1e-2, 1e-3, 1e-4, 1e-5, 1e-6})
+      row("cvode_bdf" + std::to_string(q), "rtol", rtol, bdf(q, rtol));
   // Symplectic Euler from just below its stable step (rounded to divide the sample interval).
   const Scene base = load_scene(scene, scene_overrides);
   const double limit =
@@ -168,13 +215,11 @@ int main(int argc, char** argv) {
   const double h0 = kSampleInterval / std::ceil(kSampleInterval / (0.95 * limit));
   std::printf("symplectic Euler stable limit %.3g s, largest step run %.3g s\n", limit, h0);
   for (double h = h0; h > h0 / 20; h /= 2)
-    row("symplectic_euler", "h", h,
-        run_case(scene, scene_overrides, stepped("symplectic_euler", h)));
+    row("symplectic_euler", "h", h, stepped("symplectic_euler", h));
   for (int order : {2, 4, 8})
     for (double rtol : {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8})
       if (order > 2 || rtol >= 1e-6)  // second order needs ~3x the steps per decade beyond that
-        row("arkode_order" + std::to_string(order), "rtol", rtol,
-            run_case(scene, scene_overrides, arkode(order, rtol)));
+        row("arkode_order" + std::to_string(order), "rtol", rtol, arkode(order, rtol));
   std::cout << "wrote " << out << "\n";
   return 0;
 }

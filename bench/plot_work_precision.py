@@ -25,6 +25,8 @@ STYLE = {  # integrator -> (colour, marker)
     "arkode_dirk2": ("tab:cyan", "<"),
     "arkode_dirk3": ("tab:olive", ">"),
     "arkode_dirk4": ("tab:gray", "h"),
+    "cvode_bdf2": ("black", "*"),
+    "cvode_bdf5": ("gold", "p"),
 }
 
 
@@ -58,7 +60,7 @@ def main():
             colour, marker = STYLE.get(name, ("black", "x"))
             ax.loglog([q[0] for q in pts], [q[1] for q in pts], marker=marker, color=colour, label=name)
         ax.set_xlabel("wall time [s]")
-        ax.set_ylabel("max tip error over time [m]")
+        ax.set_ylabel("max error over time [m] (tips, or all nodes)")
         ax.set_title(a.title[k] if k < len(a.title) else path)
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8)

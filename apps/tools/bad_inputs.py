@@ -239,7 +239,19 @@ def cases(exe):
             ("arkode_dirk order 6", {"integrator": "arkode_dirk", "arkode": {"order": 6}}),
             ("arkode_dirk consistent mass", {"integrator": "arkode_dirk", "mass": "consistent"}),
             ("arkode fixed_step as a number", {"integrator": "arkode_dirk",
-                                               "arkode": {"fixed_step": 1}})]:
+                                               "arkode": {"fixed_step": 1}}),
+            ("cvode_bdf max_order 6", {"integrator": "cvode_bdf", "cvode": {"max_order": 6}}),
+            ("cvode_bdf max_order 0", {"integrator": "cvode_bdf", "cvode": {"max_order": 0}}),
+            ("cvode_bdf max_order 2.5", {"integrator": "cvode_bdf", "cvode": {"max_order": 2.5}}),
+            ("cvode_bdf relative_tolerance 0",
+             {"integrator": "cvode_bdf", "cvode": {"relative_tolerance": 0}}),
+            ("cvode_bdf absolute_tolerance -1",
+             {"integrator": "cvode_bdf", "cvode": {"absolute_tolerance": -1}}),
+            ("cvode_bdf max_steps 0", {"integrator": "cvode_bdf", "cvode": {"max_steps": 0}}),
+            ("cvode_bdf fixed_step", {"integrator": "cvode_bdf", "cvode": {"fixed_step": True}}),
+            ("cvode section with arkode_dirk", {"integrator": "arkode_dirk",
+                                                "cvode": {"max_order": 2}}),
+            ("cvode_bdf consistent mass", {"integrator": "cvode_bdf", "mass": "consistent"})]:
         def dynamic(s, section=section):
             s["analysis"] = "dynamic"
             s["dynamic"] = {"time_step": 0.01, "duration": 0.02, **section}

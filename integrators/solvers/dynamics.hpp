@@ -2,7 +2,7 @@
 /// Options and step records shared by the time integrators (paper section 4 and the explicit
 /// comparators): implicit Euler, Newmark and generalized-alpha (implicit_stepper.hpp), symplectic
 /// Euler (symplectic_euler.hpp) and SUNDIALS ARKODE, ERKStep and ARKStep's diagonally implicit
-/// methods (arkode_stepper.hpp).
+/// methods, CVODE's BDF (sundials_stepper.hpp).
 
 #include "integrators/solvers/newton.hpp"
 
@@ -16,6 +16,7 @@ enum class Integrator {
   kArkode,            ///< SUNDIALS ERKStep: adaptive explicit Runge-Kutta of a chosen order
   kGeneralizedAlpha,  ///< Chung-Hulbert: second order, implicit, tunable high-frequency damping
   kArkodeDirk,        ///< SUNDIALS ARKStep: adaptive diagonally implicit Runge-Kutta (order 2-5)
+  kCvodeBdf,          ///< SUNDIALS CVODE: variable-order (1 to max_order), variable-step BDF
 };
 
 /// Whether the scheme solves a nonlinear system per step (or stage) with Newton over a System
@@ -35,14 +36,23 @@ constexpr bool has_erk_table(int order) {
   return order >= 2 && order <= 8 && order != 7;
 }
 
-/// ARKODE settings (integrators kArkode and kArkodeDirk).
-struct ArkodeOptions {
-  int order = 4;  ///< kArkode: has_erk_table(order); kArkodeDirk: has_dirk_table(order)
+/// The error control of SUNDIALS' adaptive steppers (ARKODE and CVODE).
+struct ErrorControl {
   double relative_tolerance = 1e-6;
   double absolute_tolerance = 1e-9;  ///< [m] on positions, [m/s] on velocities
   long max_steps = 100000;           ///< internal steps per output interval
+};
+
+/// ARKODE settings (integrators kArkode and kArkodeDirk).
+struct ArkodeOptions : ErrorControl {
+  int order = 4;  ///< kArkode: has_erk_table(order); kArkodeDirk: has_dirk_table(order)
   /// Internal steps of exactly time_step, without error control (for measured orders).
   bool fixed_step = false;
+};
+
+/// CVODE settings (integrator kCvodeBdf).
+struct CvodeOptions : ErrorControl {
+  int max_order = 5;  ///< the highest BDF order CVODE may choose, 1 to 5
 };
 
 /// Newmark's parameters: x^{n+1} = x^n + h v^n + h^2 ((1/2 - beta) a^n + beta a^{n+1}),
@@ -91,6 +101,7 @@ struct DynamicOptions {
   double duration = 1.0;    ///< simulated time [s]; prescribed motions ramp with t / duration
   RayleighDamping damping;
   ArkodeOptions arkode;  ///< also for kArkodeDirk (order: has_dirk_table)
+  CvodeOptions cvode;
   GeneralizedAlphaOptions generalized_alpha;
   NewtonOptions newton;
 };

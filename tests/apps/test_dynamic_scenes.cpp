@@ -81,7 +81,7 @@ TEST(DynamicScenes, EveryIntegratorHonoursDirichletConditionsExactly) {
     "dynamic": {"time_step": 0.0002, "duration": 0.002}
   })";
   for (const char* integrator : {"implicit_euler", "newmark", "generalized_alpha",
-                                 "symplectic_euler", "arkode", "arkode_dirk"}) {
+                                 "symplectic_euler", "arkode", "arkode_dirk", "cvode_bdf"}) {
     const Scene s =
         load_scene(path, {parse_override(std::string("dynamic.integrator=") + integrator)});
     const std::vector<Index>& face = s.constraints[0].nodes;
@@ -352,12 +352,20 @@ TEST(DynamicScenes, ViscoelasticBarFasterThanTheStepMovesAsTheRelaxedBar) {
   EXPECT_LT(difference, 0.01 * deflection);
 }
 
-TEST(DynamicScenes, ArkodeFailuresAreReportedWithTheirFlag) {
+TEST(DynamicScenes, SundialsFailuresAreReportedWithTheirFlag) {
   const RunResult r = run(
       load("falling_bars", {R"(dynamic.arkode={"max_steps": 2})", "dynamic.integrator=arkode"}));
   EXPECT_FALSE(r.success);
   EXPECT_NE(r.message.find("ARK_TOO_MUCH_WORK"), std::string::npos) << r.message;
   EXPECT_EQ(r.steps.size(), 0u);
+  const RunResult bdf = run(
+      load("falling_bars", {R"(dynamic.cvode={"max_steps": 2})", "dynamic.integrator=cvode_bdf"}));
+  EXPECT_FALSE(bdf.success);
+  EXPECT_NE(bdf.message.find("cvode: CV_TOO_MUCH_WORK at t = 0.000000 s: more than 2 internal "
+                             "steps in the output interval"),
+            std::string::npos)
+      << bdf.message;
+  EXPECT_EQ(bdf.steps.size(), 0u);
   try {
     load("falling_bars", {"dynamic.integrator=arkode", R"(dynamic.arkode={"order": 7})"});
     FAIL() << "order 7 has no default table";

@@ -130,7 +130,8 @@ TEST_F(SceneFileTest, TimeIntegrationSettingsAreChecked) {
   };
   EXPECT_NE(error(kValid, set("dynamic", R"({"integrator": "rk4", "time_step": 1, "duration": 1})"))
                 .find("dynamic.integrator: unknown integrator 'rk4' (expected implicit_euler, "
-                      "newmark, generalized_alpha, symplectic_euler, arkode or arkode_dirk)"),
+                      "newmark, generalized_alpha, symplectic_euler, arkode, arkode_dirk or "
+                      "cvode_bdf)"),
             std::string::npos);
   EXPECT_NE(error(kValid, set("quasistatic", R"({"time_step": 1, "duration": 1})"))
                 .find("dynamic.viscosity: missing"),
@@ -179,7 +180,15 @@ TEST_F(SceneFileTest, TimeIntegrationSettingsAreChecked) {
       {R"("integrator": "arkode_dirk", "arkode": {"order": 8})",
        "dynamic.arkode.order: must be 2, 3, 4 or 5 for arkode_dirk"},
       {R"("integrator": "arkode_dirk", "mass": "consistent")",
-       "dynamic.mass: arkode_dirk takes the lumped mass matrix"}};
+       "dynamic.mass: arkode_dirk takes the lumped mass matrix"},
+      {R"("integrator": "cvode_bdf", "cvode": {"max_order": 6})",
+       "dynamic.cvode.max_order: must be 1 to 5"},
+      {R"("integrator": "cvode_bdf", "cvode": {"relative_tolerance": 0})",
+       "dynamic.cvode.relative_tolerance: must be > 0"},
+      {R"("integrator": "arkode", "cvode": {})",
+       "dynamic.cvode: only for \"integrator\": \"cvode_bdf\""},
+      {R"("integrator": "cvode_bdf", "mass": "consistent")",
+       "dynamic.mass: cvode_bdf takes the lumped mass matrix"}};
   for (const auto& [section, message] : integrator_errors) {
     const std::string d = std::string(R"({"time_step": 1, "duration": 1, )") + section + "}";
     EXPECT_NE(error(kValid, set("dynamic", d)).find(message), std::string::npos) << section;

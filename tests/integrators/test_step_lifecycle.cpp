@@ -10,9 +10,9 @@
 #include "core/mass.hpp"
 #include "core/mesh_generators.hpp"
 #include "integrators/forces/elasticity.hpp"
-#include "integrators/solvers/arkode_stepper.hpp"
 #include "integrators/solvers/implicit_stepper.hpp"
 #include "integrators/solvers/static_solver.hpp"
+#include "integrators/solvers/sundials_stepper.hpp"
 #include "integrators/solvers/symplectic_euler.hpp"
 
 namespace depthfem {
@@ -151,7 +151,7 @@ TEST(StepLifecycle, ExplicitSchemesFollowItAndEndExactlyAtTheDuration) {
     Points x = rig.X, v = Points::Zero(3, 3);
     const VectorX mass = VectorX::Constant(3, 200.0);  // period 14 s: 0.3 s steps are stable
     if (scheme == Integrator::kArkode) {
-      ArkodeStepper(rig.lifecycle, mass, three_tenths(scheme)).run(x, v);
+      SundialsStepper(rig.lifecycle, mass, three_tenths(scheme)).run(x, v);
     } else {
       SymplecticEuler(rig.lifecycle, mass, three_tenths(scheme), 1.0).run(x, v);
     }
@@ -190,7 +190,7 @@ TEST(StepLifecycle, MovingObstacleMovesUnderExplicitIntegrators) {
     const VectorX mass = lumped_mass(mesh.X, mesh.tets, VectorX::Constant(mesh.num_tets(), 1000.0));
     Points x = mesh.X, v = Points::Zero(mesh.num_nodes(), 3);
     if (scheme == Integrator::kArkode) {
-      ArkodeStepper(lifecycle, mass, o).run(x, v);
+      SundialsStepper(lifecycle, mass, o).run(x, v);
     } else {
       SymplecticEuler(lifecycle, mass, o, 1.0).run(x, v);
     }

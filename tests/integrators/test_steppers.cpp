@@ -1,18 +1,19 @@
 // The time steppers on one mass: free fall under gravity and a mass on a linear spring (the
 // harmonic oscillator), each against its closed form: implicit Euler's and symplectic Euler's
 // discrete solutions, Newmark's exactness for constant acceleration and its discrete frequency
-// with exact energy conservation, ARKODE to its tolerance.
+// with exact energy conservation, ARKODE and CVODE to their tolerances.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numbers>
 
 #include "core/error.hpp"
 #include "integrators/forces/gravity.hpp"
-#include "integrators/solvers/arkode_stepper.hpp"
 #include "integrators/solvers/implicit_stepper.hpp"
+#include "integrators/solvers/sundials_stepper.hpp"
 #include "integrators/solvers/symplectic_euler.hpp"
 
 namespace depthfem {
@@ -34,6 +35,13 @@ struct Problem {
 struct Trajectory {
   std::vector<StepRecord> steps;
   std::vector<Vec3> x, v;
+  std::vector<SundialsInternalStep> internal;  ///< SUNDIALS steppers: the internal steps
+  /// The internal steps that reached an output at time t: those ending before it and the one
+  /// ending at or past it.
+  double internal_steps_to(double t) const {
+    return 1.0 + static_cast<double>(std::count_if(internal.begin(), internal.end(),
+                                                   [t](const auto& s) { return s.time < t; }));
+  }
   /// The total energy of step n: potential (spring and gravity) plus kinetic.
   double energy(size_t n) const { return steps[n].energy + steps[n].kinetic_energy; }
 };
@@ -50,6 +58,8 @@ DynamicOptions options_for(Integrator scheme, double h, double duration) {
   o.newton.tolerance = 1e-9;
   o.arkode.relative_tolerance = 1e-8;
   o.arkode.absolute_tolerance = 1e-12;
+  o.cvode.relative_tolerance = 1e-8;
+  o.cvode.absolute_tolerance = 1e-12;
   return o;
 }
 
@@ -62,8 +72,9 @@ Trajectory simulate(const Problem& p, const DynamicOptions& o) {
     system.add(std::move(spring));
   }
   if (!p.g.isZero()) system.add(std::make_unique<Gravity>(VectorX::Constant(1, p.m), p.g, false));
-  const bool implicit =
-      o.integrator == Integrator::kImplicitEuler || o.integrator == Integrator::kNewmark;
+  const bool implicit = o.integrator == Integrator::kImplicitEuler ||
+                        o.integrator == Integrator::kNewmark ||
+                        o.integrator == Integrator::kCvodeBdf;
   NodalSpring* inertia =
       implicit ? &system.add(std::make_unique<NodalSpring>("inertia", VectorX::Constant(1, p.m)))
                : nullptr;
@@ -91,8 +102,12 @@ Trajectory simulate(const Problem& p, const DynamicOptions& o) {
       SymplecticEuler(lifecycle, m, o, p.k > 0 ? 2 / p.omega() : kInf).run(x, v);
       break;
     case Integrator::kArkode:
-      ArkodeStepper(lifecycle, m, o).run(x, v);
+    case Integrator::kCvodeBdf: {
+      SundialsStepper stepper(lifecycle, m, o, {inertia, {}});
+      stepper.run(x, v);
+      out.internal = stepper.history();
       break;
+    }
   }
   return out;
 }
@@ -157,11 +172,35 @@ TEST(ImplicitStepper, NewmarkFreeFallIsExact) {
   expect_exact_free_fall(Integrator::kNewmark, 1e-11, 1e-12 / 0.05);
 }
 
-TEST(ArkodeStepper, FreeFallWithinItsTolerance) {
+TEST(SundialsStepper, FreeFallWithinItsTolerance) {
   // No truncation error, so well within one step's error allowance rtol |y| + atol
   // (1e-8 x 10 m + 1e-12 m).
   const double allowance = 1e-8 * 10 + 1e-12;
   expect_exact_free_fall(Integrator::kArkode, allowance, allowance);
+}
+
+// CVODE's BDF integrates a constant acceleration exactly from order 2 on, but it starts at order
+// 1 (backward Euler, whose positions lag by h^2 g / 2 a step): its error in x stays within the
+// local errors it allowed, each component below sqrt(6) (rtol |y|_max + atol) per internal step,
+// summed over the steps (velocities, linear in t, are exact at every order: round-off and the
+// Newton test only).
+TEST(SundialsStepper, CvodeBdfFreeFallWithinItsTolerance) {
+  const Problem p = free_fall();
+  const Trajectory run = simulate(p, options_for(Integrator::kCvodeBdf, 0.05, 1.0));
+  ASSERT_EQ(run.steps.size(), 20u);
+  const double per_step = std::sqrt(6.0) * (1e-8 * 10 + 1e-12);
+  double worst_x = 0, worst_v = 0;
+  for (size_t i = 0; i < run.x.size(); ++i) {
+    const double t = run.steps[i].load;
+    const double ex = (run.x[i] - (p.x0 + t * p.v0 + 0.5 * t * t * p.g)).norm();
+    const double ev = (run.v[i] - (p.v0 + t * p.g)).norm();
+    EXPECT_LE(ex, run.internal_steps_to(t) * per_step) << "t = " << t;
+    EXPECT_LE(ev, 1e-9) << "t = " << t;
+    worst_x = std::max(worst_x, ex);
+    worst_v = std::max(worst_v, ev);
+  }
+  std::printf("largest error %.3e m, %.3e m/s after %zu internal steps\n", worst_x, worst_v,
+              run.internal.size());
 }
 
 // The oscillator: omega = 2 pi (period 1 s), motion along x.
@@ -297,39 +336,46 @@ TEST(SymplecticEuler, OscillatorHasItsDiscreteFrequencyAndModifiedEnergy) {
                InputError);
 }
 
-// ARKODE ERKStep (order 4) on the oscillator against the exact motion
-// x0 cos(omega t) + v0 / omega sin(omega t).
-TEST(ArkodeStepper, OscillatorWithinItsTolerance) {
+// ARKODE ERKStep (order 4) and CVODE's BDF (orders up to 5) on the oscillator against the exact
+// motion x0 cos(omega t) + v0 / omega sin(omega t).
+TEST(SundialsStepper, OscillatorWithinItsTolerance) {
   const Problem p = oscillator();
   const double w = p.omega(), x0 = p.x0.x(), y0 = p.v0.x() / w, amplitude = std::hypot(x0, y0);
-  double error[2];
-  for (int tight = 0; tight < 2; ++tight) {
-    DynamicOptions o = options_for(Integrator::kArkode, 0.1, 2.0);
-    o.arkode.relative_tolerance = tight ? 1e-10 : 1e-6;
-    const Trajectory run = simulate(p, o);
-    ASSERT_EQ(run.steps.size(), 20u);
-    error[tight] = 0;
-    long internal = 0;
-    for (size_t i = 0; i < run.x.size(); ++i) {
-      const double t = run.steps[i].load;
-      const double x = x0 * std::cos(w * t) + y0 * std::sin(w * t);
-      const double y = -x0 * std::sin(w * t) + y0 * std::cos(w * t);
-      error[tight] =
-          std::max({error[tight], std::abs(run.x[i].x() - x), std::abs(run.v[i].x() / w - y)});
-      internal += run.steps[i].newton_iterations;  // ARKODE's internal steps
-      // ERKStep keeps each internal step's estimated local error (in the weighted RMS norm over
-      // the six components) below 1, so each component below sqrt(6) (rtol |y_i| + atol); the
-      // global error of this non-expanding motion is at most their sum over the steps so far
-      // (in (x, v / omega), where velocities of omega A weigh like positions of A). A bound,
-      // not an estimate: measured 2.8e-7 and 5.5e-11, 500 and 2500 times below it.
-      const double allowance = std::sqrt(6.0) * (o.arkode.relative_tolerance * amplitude +
-                                                 o.arkode.absolute_tolerance / std::min(1.0, w));
-      EXPECT_LE(error[tight], static_cast<double>(internal) * allowance) << "t = " << t;
+  for (Integrator scheme : {Integrator::kArkode, Integrator::kCvodeBdf}) {
+    SCOPED_TRACE(scheme == Integrator::kArkode ? "arkode" : "cvode_bdf");
+    double error[2];
+    for (int tight = 0; tight < 2; ++tight) {
+      DynamicOptions o = options_for(scheme, 0.1, 2.0);
+      ErrorControl& control = scheme == Integrator::kArkode ? static_cast<ErrorControl&>(o.arkode)
+                                                            : static_cast<ErrorControl&>(o.cvode);
+      control.relative_tolerance = tight ? 1e-10 : 1e-6;
+      // BDF: each step's Newton solve stops at a force residual of its own test (quadratic
+      // potential: one step is exact up to round-off).
+      o.newton.tolerance = 1e-12;
+      const Trajectory run = simulate(p, o);
+      ASSERT_EQ(run.steps.size(), 20u);
+      error[tight] = 0;
+      for (size_t i = 0; i < run.x.size(); ++i) {
+        const double t = run.steps[i].load;
+        const double x = x0 * std::cos(w * t) + y0 * std::sin(w * t);
+        const double y = -x0 * std::sin(w * t) + y0 * std::cos(w * t);
+        error[tight] =
+            std::max({error[tight], std::abs(run.x[i].x() - x), std::abs(run.v[i].x() / w - y)});
+        // Each internal step's estimated local error stays below 1 in the weighted RMS norm over
+        // the six components, so each component below sqrt(6) (rtol |y_i| + atol); the global
+        // error of this non-expanding motion is at most their sum over the steps so far (in
+        // (x, v / omega), where velocities of omega A weigh like positions of A). A bound, not
+        // an estimate.
+        const double allowance = std::sqrt(6.0) * (control.relative_tolerance * amplitude +
+                                                   control.absolute_tolerance / std::min(1.0, w));
+        EXPECT_LE(error[tight], run.internal_steps_to(t) * allowance) << "t = " << t;
+      }
+      std::printf("rtol %g: largest error %.3e after %zu internal steps\n",
+                  control.relative_tolerance, error[tight], run.internal.size());
     }
+    // A tighter tolerance gives a closer answer (four orders of tolerance: two orders at least).
+    EXPECT_LT(error[1], 1e-2 * error[0]);
   }
-  // A tighter tolerance gives a closer answer (four orders of tolerance: two orders at least;
-  // measured 3.7).
-  EXPECT_LT(error[1], 1e-2 * error[0]);
 }
 
 }  // namespace

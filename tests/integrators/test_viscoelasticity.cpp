@@ -24,8 +24,8 @@
 #include "integrators/assembled.hpp"
 #include "integrators/forces/elasticity.hpp"
 #include "integrators/forces/gravity.hpp"
-#include "integrators/solvers/arkode_stepper.hpp"
 #include "integrators/solvers/implicit_stepper.hpp"
+#include "integrators/solvers/sundials_stepper.hpp"
 #include "integrators/solvers/symplectic_euler.hpp"
 #include "materials/all_models.hpp"
 
@@ -338,9 +338,9 @@ TEST(Viscoelasticity, EveryIntegratorFollowsAConstantStrainRate) {
     list.push_back({"plane", plane, Displaced{eps_rate * x * Vec3::UnitX()}});
   }
   const Constraints constraints(m.X, list);
-  for (Integrator scheme :
-       {Integrator::kImplicitEuler, Integrator::kNewmark, Integrator::kGeneralizedAlpha,
-        Integrator::kSymplecticEuler, Integrator::kArkode, Integrator::kArkodeDirk}) {
+  for (Integrator scheme : {Integrator::kImplicitEuler, Integrator::kNewmark,
+                            Integrator::kGeneralizedAlpha, Integrator::kSymplecticEuler,
+                            Integrator::kArkode, Integrator::kArkodeDirk, Integrator::kCvodeBdf}) {
     PhaseTimers timers;
     System system(static_cast<Index>(m.X.rows()), timers);
     Elasticity& e = system.add(
@@ -384,10 +384,11 @@ TEST(Viscoelasticity, EveryIntegratorFollowsAConstantStrainRate) {
         SymplecticEuler(lifecycle, mass, o, 1.0).run(x, v);
         break;
       case Integrator::kArkode:
-        ArkodeStepper(lifecycle, mass, o).run(x, v);
+        SundialsStepper(lifecycle, mass, o).run(x, v);
         break;
       case Integrator::kArkodeDirk:
-        ArkodeStepper(lifecycle, mass, o, {inertia, {}}).run(x, v);
+      case Integrator::kCvodeBdf:
+        SundialsStepper(lifecycle, mass, o, {inertia, {}}).run(x, v);
         break;
     }
     EXPECT_EQ(checked, 20) << int(scheme);
@@ -434,7 +435,9 @@ namespace {
 // neo-Hookean bar 1 x 0.1 x 0.1 m (10 x 2 x 2 cells), clamped at x = 0, with one Prony term on
 // its shear modulus, is set vibrating in its first bending mode phi (K phi = w0^2 M phi, the
 // instantaneous model) at a small amplitude (tip velocity 1e-3 m/s, strains ~1e-5: linear) and
-// swings freely under Newmark (no numerical damping, 200 steps per period). By the
+// swings freely under Newmark (no numerical damping, 200 steps per period), ARKODE's ERKStep and
+// CVODE's BDF (rtol 1e-8, 50 outputs per period; each of their internal steps advances the
+// history, so the outputs do not set the relaxation's step). By the
 // correspondence principle the mesh's free motions are e^(lambda t) with
 //   det(lambda^2 M + K - K_G + g(lambda) K_G) = 0,  g(p) = beta_inf + beta p tau / (1 + p tau),
 // K_G = mu dK/dmu at fixed bulk modulus the shear part of the stiffness (g(p) mu is p times
@@ -512,14 +515,16 @@ TEST(Viscoelasticity, CantileverLossFactorMatchesTheLinearViscoelasticPrediction
     one_mode = std::complex<double>(0, w0) * std::sqrt(1 - s + s * g(one_mode));
 
   const double period = 2 * std::numbers::pi / lambda.imag();
-  for (Integrator scheme : {Integrator::kNewmark, Integrator::kArkode}) {
-    SCOPED_TRACE(scheme == Integrator::kNewmark ? "newmark" : "arkode");
+  for (Integrator scheme : {Integrator::kNewmark, Integrator::kArkode, Integrator::kCvodeBdf}) {
+    SCOPED_TRACE(int(scheme));
     DynamicOptions o;
     o.integrator = scheme;
     o.time_step = period / (scheme == Integrator::kNewmark ? 200 : 50);  // ARKODE: output interval
     o.duration = 6 * period;
     o.arkode.relative_tolerance = 1e-8;
     o.arkode.absolute_tolerance = 1e-11;  // [m], [m/s]: amplitudes ~3e-4 m
+    o.cvode.relative_tolerance = 1e-8;
+    o.cvode.absolute_tolerance = 1e-11;
     o.newton.linear.kind = LinearSolverKind::kDirect;
     // Elastic forces ~1e-2 N beside inertia terms of 1e5 N/m x 1 m that cancel to round-off
     // (1e-11 N); the energy's round-off is coarser still, so the residual decides the line
@@ -531,7 +536,7 @@ TEST(Viscoelasticity, CantileverLossFactorMatchesTheLinearViscoelasticPrediction
     system.add(std::make_unique<Elasticity>(  // its time: load * the integrator's duration
         m.X, m.tets, std::vector{viscoelastic_group(m, nh, {{beta}, {tau}})},
         ElasticityOptions{.duration = o.duration}));
-    NodalSpring* inertia = scheme == Integrator::kNewmark
+    NodalSpring* inertia = scheme != Integrator::kArkode
                                ? &system.add(std::make_unique<NodalSpring>("inertia", mass))
                                : nullptr;
     std::vector<double> t, q;
@@ -543,10 +548,10 @@ TEST(Viscoelasticity, CantileverLossFactorMatchesTheLinearViscoelasticPrediction
                               q.push_back(Mphi.dot(as_dofs(x) - as_dofs(m.X)));
                             });
     Points x = m.X, v = as_points(1e-3 / phi.cwiseAbs().maxCoeff() * phi);
-    if (inertia) {
+    if (scheme == Integrator::kNewmark) {
       ImplicitStepper(lifecycle, {inertia, {}}, o).run(x, v);
     } else {
-      ArkodeStepper(lifecycle, mass, o).run(x, v);
+      SundialsStepper(lifecycle, mass, o, {inertia, {}}).run(x, v);
     }
 
     // Peaks of |q| after the first period, by a parabola through each local maximum and its

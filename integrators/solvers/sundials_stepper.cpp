@@ -1,7 +1,8 @@
-#include "integrators/solvers/arkode_stepper.hpp"
+#include "integrators/solvers/sundials_stepper.hpp"
 
 #include <arkode/arkode_arkstep.h>
 #include <arkode/arkode_erkstep.h>
+#include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 #include <sundials/sundials_nonlinearsolver.h>
@@ -29,8 +30,11 @@ struct NonlinearSolverDeleter {
   void operator()(SUNNonlinearSolver nls) const { SUNNonlinSolFree(nls); }
 };
 
-// The calls that differ between ERKStep and ARKStep, all with the same signatures.
+// The calls that differ between ERKStep, ARKStep and CVODE, all with the same signatures. CVODE
+// has neither a post-step hook nor fixed steps (nullptr): it is advanced one internal step at a
+// time instead.
 struct Api {
+  const char* name;  // the package, for messages
   int (*evolve)(void*, realtype, N_Vector, realtype*, int);
   int (*num_steps)(void*, long*);
   int (*last_step)(void*, realtype*);
@@ -45,16 +49,48 @@ struct Api {
   int (*set_postprocess)(void*, ARKPostProcessFn);
   int (*set_fixed_step)(void*, realtype);
 };
-constexpr Api kErk{
-    ERKStepEvolve,      ERKStepGetNumSteps,    ERKStepGetLastStep,     ERKStepGetReturnFlagName,
-    ERKStepFree,        ERKStepSetUserData,    ERKStepSetErrHandlerFn, ERKStepSStolerances,
-    ERKStepSetOrder,    ERKStepSetMaxNumSteps, ERKStepSetStopTime,     ERKStepSetPostprocessStepFn,
-    ERKStepSetFixedStep};
-constexpr Api kArk{
-    ARKStepEvolve,      ARKStepGetNumSteps,    ARKStepGetLastStep,     ARKStepGetReturnFlagName,
-    ARKStepFree,        ARKStepSetUserData,    ARKStepSetErrHandlerFn, ARKStepSStolerances,
-    ARKStepSetOrder,    ARKStepSetMaxNumSteps, ARKStepSetStopTime,     ARKStepSetPostprocessStepFn,
-    ARKStepSetFixedStep};
+constexpr Api kErk{"arkode",
+                   ERKStepEvolve,
+                   ERKStepGetNumSteps,
+                   ERKStepGetLastStep,
+                   ERKStepGetReturnFlagName,
+                   ERKStepFree,
+                   ERKStepSetUserData,
+                   ERKStepSetErrHandlerFn,
+                   ERKStepSStolerances,
+                   ERKStepSetOrder,
+                   ERKStepSetMaxNumSteps,
+                   ERKStepSetStopTime,
+                   ERKStepSetPostprocessStepFn,
+                   ERKStepSetFixedStep};
+constexpr Api kArk{"arkode",
+                   ARKStepEvolve,
+                   ARKStepGetNumSteps,
+                   ARKStepGetLastStep,
+                   ARKStepGetReturnFlagName,
+                   ARKStepFree,
+                   ARKStepSetUserData,
+                   ARKStepSetErrHandlerFn,
+                   ARKStepSStolerances,
+                   ARKStepSetOrder,
+                   ARKStepSetMaxNumSteps,
+                   ARKStepSetStopTime,
+                   ARKStepSetPostprocessStepFn,
+                   ARKStepSetFixedStep};
+constexpr Api kCvode{"cvode",
+                     CVode,
+                     CVodeGetNumSteps,
+                     CVodeGetLastStep,
+                     CVodeGetReturnFlagName,
+                     CVodeFree,
+                     CVodeSetUserData,
+                     CVodeSetErrHandlerFn,
+                     CVodeSStolerances,
+                     CVodeSetMaxOrd,
+                     CVodeSetMaxNumSteps,
+                     CVodeSetStopTime,
+                     nullptr,
+                     nullptr};
 
 Eigen::Map<VectorX> view(N_Vector v) {
   return {N_VGetArrayPointer(v), N_VGetLength_Serial(v)};
@@ -65,13 +101,14 @@ struct Data {
   StepLifecycle& lifecycle;
   const VectorX& mass;
   const ImplicitTerms& implicit;  // empty for ERKStep
+  const Api& api;
   double alpha, duration;
   Index nodes;
-  NewtonSolver* newton = nullptr;  // ARKStep's stage solves
+  NewtonSolver* newton = nullptr;  // the stage (step) solves of ARKStep (CVODE)
   NewtonOptions scene_test;        // the scene's Newton test, the floor of the stage solves'
   void* mem = nullptr;             // the stepper, for its step size and stage data
   NewtonResult interval;           // Newton work of the current output interval
-  std::vector<ArkodeInternalStep>* history = nullptr;
+  std::vector<SundialsInternalStep>* history = nullptr;
   double target = 0;  // end of the output interval being integrated [s]
   std::string error, stage_failure;
 
@@ -123,20 +160,13 @@ int rhs(realtype t, N_Vector y_vec, N_Vector ydot_vec, void* user) {
   return 0;
 }
 
-// The stage equation z = b + gamma f(t, z), b = zpred + sdata, solved for the correction
-// z - zpred by Newton on the free positions (see arkode_stepper.hpp); the constrained
-// components of z stay those of b (their derivatives vanish).
-int solve_stage(SUNNonlinearSolver nls, N_Vector predicted, N_Vector correction, N_Vector weights,
-                realtype tolerance, booleantype /*setup*/, void* mem) {
-  auto& d = *static_cast<Data*>(nls->content);
-  realtype t = 0, gamma = 0;
-  N_Vector zpred = nullptr, z = nullptr, fi = nullptr, sdata = nullptr;
-  void* user = nullptr;
-  if (ARKStepGetNonlinearSystemData(mem, &t, &zpred, &z, &fi, &gamma, &sdata, &user) != 0)
-    return SUN_NLS_MEM_NULL;
+// The implicit equation z = b + gamma f(t, z) of an ARKStep stage or a CVODE step, solved by
+// Newton on the free positions (see sundials_stepper.hpp) from the first guess `start`; the
+// constrained components of z stay those of b (their derivatives vanish). `correction` takes
+// z - base.
+int solve_implicit(Data& d, double t, double gamma, const VectorX& b, const VectorX& start,
+                   N_Vector base, N_Vector correction, N_Vector weights, double tolerance) {
   const Index n = 3 * d.nodes;
-  const VectorX b = view(zpred) + view(sdata);
-  const VectorX start = view(predicted) + view(correction);  // the predicted state, the first guess
   Points x = d.positions(start.head(n), t);
   const Points bx = as_points(b.head(n));
   d.implicit.inertia->set_scale(1 / (gamma * gamma));
@@ -145,7 +175,7 @@ int solve_stage(SUNNonlinearSolver nls, N_Vector predicted, N_Vector correction,
     c->set_scale(1 / gamma);
     c->set_anchor(d.anchor(x, as_dofs(x - bx)));
   }
-  // ARKODE's test: the weighted RMS norm (weights w = 1 / (rtol |y| + atol)) of the stage's
+  // SUNDIALS' test: the weighted RMS norm (weights w = 1 / (rtol |y| + atol)) of the stage's
   // remaining error at most `tolerance`. A force residual r_i leaves an error of about
   // gamma^2 r_i / m_i in x_i and gamma r_i / m_i in v_i (the Newton matrix is at least
   // M / gamma^2), so Newton stops at |r ./ s|_2 <= tolerance with
@@ -176,7 +206,7 @@ int solve_stage(SUNNonlinearSolver nls, N_Vector predicted, N_Vector correction,
   d.interval.factorizations += r.factorizations;
   d.interval.residuals = r.residuals;
   if (!r.converged) {
-    d.stage_failure = "a stage solve at t = " + std::to_string(t) + " s failed: " + r.failure;
+    d.stage_failure = "an implicit solve at t = " + std::to_string(t) + " s failed: " + r.failure;
     return SUN_NLS_CONV_RECVR;
   }
   // z_x from Newton; z_v from the velocity equation z_v = b_v + gamma P M^-1 (-grad E - C v) at
@@ -192,8 +222,33 @@ int solve_stage(SUNNonlinearSolver nls, N_Vector predicted, N_Vector correction,
   Eigen::Map<VectorX> out = view(correction);
   out.head(n) = b.head(n) + dx;
   out.tail(n) = b.tail(n) - gamma * g;
-  out -= view(zpred);
+  out -= view(base);
   return SUN_NLS_SUCCESS;
+}
+
+// ARKStep's stage equation: b = zpred + sdata, the correction z - zpred.
+int solve_stage(SUNNonlinearSolver nls, N_Vector predicted, N_Vector correction, N_Vector weights,
+                realtype tolerance, booleantype /*setup*/, void* mem) {
+  realtype t = 0, gamma = 0;
+  N_Vector zpred = nullptr, z = nullptr, fi = nullptr, sdata = nullptr;
+  void* user = nullptr;
+  if (ARKStepGetNonlinearSystemData(mem, &t, &zpred, &z, &fi, &gamma, &sdata, &user) != 0)
+    return SUN_NLS_MEM_NULL;
+  return solve_implicit(*static_cast<Data*>(nls->content), t, gamma, view(zpred) + view(sdata),
+                        view(predicted) + view(correction), zpred, correction, weights, tolerance);
+}
+
+// CVODE's BDF step: rl1 zn1 + ycor - gamma f(t, ypred + ycor) = 0 for the correction ycor, that
+// is y = b + gamma f(t, y) with b = ypred - rl1 zn1 (zn1: the Nordsieck array's h y').
+int solve_bdf_step(SUNNonlinearSolver nls, N_Vector predicted, N_Vector correction,
+                   N_Vector weights, realtype tolerance, booleantype /*setup*/, void* mem) {
+  realtype t = 0, gamma = 0, rl1 = 0;
+  N_Vector ypred = nullptr, y = nullptr, fn = nullptr, zn1 = nullptr;
+  void* user = nullptr;
+  if (CVodeGetNonlinearSystemData(mem, &t, &ypred, &y, &fn, &gamma, &rl1, &zn1, &user) != 0)
+    return SUN_NLS_MEM_NULL;
+  return solve_implicit(*static_cast<Data*>(nls->content), t, gamma, view(ypred) - rl1 * view(zn1),
+                        view(predicted) + view(correction), ypred, correction, weights, tolerance);
 }
 
 SUNNonlinearSolver_Type stage_solver_type(SUNNonlinearSolver) {
@@ -220,7 +275,7 @@ int free_stage_solver(SUNNonlinearSolver nls) {
 int internal_step_done(realtype t, N_Vector y_vec, void* user) {
   auto& d = *static_cast<Data*>(user);
   realtype h = 0;
-  if (d.implicit.inertia ? ARKStepGetLastStep(d.mem, &h) : ERKStepGetLastStep(d.mem, &h)) return -1;
+  if (d.api.last_step(d.mem, &h)) return -1;
   d.history->push_back({t, h});
   if (t > d.target) return 0;
   d.lifecycle.system().complete_step(d.positions(view(y_vec).head(3 * d.nodes), t));
@@ -235,24 +290,32 @@ void capture_error(int /*code*/, const char* /*module*/, const char* function, c
 
 void check(int flag, const char* call) {
   if (flag < 0)
-    throw SolveError(std::string("arkode: ") + call + " failed with flag " + std::to_string(flag));
+    throw SolveError(std::string("sundials: ") + call + " failed with flag " +
+                     std::to_string(flag));
 }
 
 }  // namespace
 
-ArkodeStepper::ArkodeStepper(StepLifecycle& lifecycle, VectorX mass, DynamicOptions options,
-                             ImplicitTerms implicit)
+SundialsStepper::SundialsStepper(StepLifecycle& lifecycle, VectorX mass, DynamicOptions options,
+                                 ImplicitTerms implicit)
     : lifecycle_(lifecycle),
       mass_(std::move(mass)),
       options_(options),
       implicit_(std::move(implicit)) {
   const int order = options_.arkode.order;
-  if (options_.integrator == Integrator::kArkodeDirk) {
-    if (!has_dirk_table(order)) {
-      throw InputError("arkode_dirk: no diagonally implicit table of order " +
-                       std::to_string(order) + " (expected 2, 3, 4 or 5)");
+  const Integrator integrator = options_.integrator;
+  if (integrator == Integrator::kCvodeBdf) {
+    if (options_.cvode.max_order < 1 || options_.cvode.max_order > 5) {
+      throw InputError("cvode_bdf: no BDF of order " + std::to_string(options_.cvode.max_order) +
+                       " (expected 1 to 5)");
     }
-    if (!implicit_.inertia) throw std::logic_error("ArkodeStepper: arkode_dirk needs inertia");
+  } else if (integrator == Integrator::kArkodeDirk && !has_dirk_table(order)) {
+    throw InputError("arkode_dirk: no diagonally implicit table of order " + std::to_string(order) +
+                     " (expected 2, 3, 4 or 5)");
+  }
+  if (integrator != Integrator::kArkode) {
+    if (!implicit_.inertia)
+      throw std::logic_error("SundialsStepper: an implicit method needs inertia");
     return;
   }
   if (!has_erk_table(order)) {
@@ -266,9 +329,11 @@ ArkodeStepper::ArkodeStepper(StepLifecycle& lifecycle, VectorX mass, DynamicOpti
     throw InputError("arkode: a consistent mass matrix needs an implicit integrator");
 }
 
-void ArkodeStepper::run(Points& x, Points& v) {
-  const bool dirk = options_.integrator == Integrator::kArkodeDirk;
-  const Api& api = dirk ? kArk : kErk;
+void SundialsStepper::run(Points& x, Points& v) {
+  const Integrator integrator = options_.integrator;
+  const bool bdf = integrator == Integrator::kCvodeBdf;
+  const bool implicit = integrator != Integrator::kArkode;
+  const Api& api = bdf ? kCvode : implicit ? kArk : kErk;
   const Constraints& constraints = lifecycle_.constraints();
   const Index nodes = static_cast<Index>(x.rows());
   const Index n = 3 * nodes;
@@ -279,12 +344,13 @@ void ArkodeStepper::run(Points& x, Points& v) {
       N_VNew_Serial(2 * n, ctx.get()));
   view(y.get()) << as_dofs(x), as_dofs(v);
 
-  // With ARKStep the damping is in the System's tethers, not alpha.
+  // With an implicit method the damping is in the System's tethers, not alpha.
   NewtonSolver newton(lifecycle_.system(), constraints, options_.newton);
   Data data{.lifecycle = lifecycle_,
             .mass = mass_,
             .implicit = implicit_,
-            .alpha = dirk ? 0.0 : options_.damping.mass,
+            .api = api,
+            .alpha = implicit ? 0.0 : options_.damping.mass,
             .duration = options_.duration,
             .nodes = nodes,
             .newton = &newton,
@@ -296,36 +362,73 @@ void ArkodeStepper::run(Points& x, Points& v) {
             .stage_failure = {}};
   history_.clear();
   const auto free_stepper = [&api](void* mem) { api.free(&mem); };
-  const std::unique_ptr<void, decltype(free_stepper)> mem(
-      dirk ? ARKStepCreate(nullptr, rhs, 0.0, y.get(), ctx.get())
-           : ERKStepCreate(rhs, 0.0, y.get(), ctx.get()),
-      free_stepper);
-  if (!mem)
-    throw SolveError(dirk ? "arkode: ARKStepCreate failed" : "arkode: ERKStepCreate failed");
+  std::unique_ptr<void, decltype(free_stepper)> mem(nullptr, free_stepper);
+  if (bdf) {
+    mem.reset(CVodeCreate(CV_BDF, ctx.get()));
+    if (mem) check(CVodeInit(mem.get(), rhs, 0.0, y.get()), "CVodeInit");
+  } else {
+    mem.reset(implicit ? ARKStepCreate(nullptr, rhs, 0.0, y.get(), ctx.get())
+                       : ERKStepCreate(rhs, 0.0, y.get(), ctx.get()));
+  }
+  if (!mem) throw SolveError(std::string(api.name) + ": creating the stepper failed");
   data.mem = mem.get();
   std::unique_ptr<std::remove_pointer_t<SUNNonlinearSolver>, NonlinearSolverDeleter> stage_solver;
-  if (dirk) {
+  if (implicit) {
     stage_solver.reset(SUNNonlinSolNewEmpty(ctx.get()));
-    if (!stage_solver) throw SolveError("arkode: SUNNonlinSolNewEmpty failed");
+    if (!stage_solver) throw SolveError("sundials: SUNNonlinSolNewEmpty failed");
     stage_solver->content = &data;
     stage_solver->ops->gettype = stage_solver_type;
-    stage_solver->ops->solve = solve_stage;
+    stage_solver->ops->solve = bdf ? solve_bdf_step : solve_stage;
     stage_solver->ops->setsysfn = ignore_system_function;
     stage_solver->ops->getnumiters = stage_solver_iterations;
     stage_solver->ops->free = free_stage_solver;
+  }
+  if (bdf) {
+    check(CVodeSetNonlinearSolver(mem.get(), stage_solver.get()), "CVodeSetNonlinearSolver");
+  } else if (implicit) {
     check(ARKStepSetNonlinearSolver(mem.get(), stage_solver.get()), "ARKStepSetNonlinearSolver");
     // The stage solve leaves z with z = b + gamma f(z): f follows from it without evaluating.
     check(ARKStepSetDeduceImplicitRhs(mem.get(), SUNTRUE), "ARKStepSetDeduceImplicitRhs");
   }
-  const ArkodeOptions& o = options_.arkode;
+  const ErrorControl& control = bdf ? static_cast<const ErrorControl&>(options_.cvode)
+                                    : static_cast<const ErrorControl&>(options_.arkode);
   check(api.set_user_data(mem.get(), &data), "SetUserData");
   check(api.set_error_handler(mem.get(), capture_error, &data), "SetErrHandlerFn");
-  check(api.tolerances(mem.get(), o.relative_tolerance, o.absolute_tolerance), "SStolerances");
-  check(api.set_order(mem.get(), o.order), "SetOrder");
-  check(api.set_max_steps(mem.get(), o.max_steps), "SetMaxNumSteps");
+  check(api.tolerances(mem.get(), control.relative_tolerance, control.absolute_tolerance),
+        "SStolerances");
+  check(api.set_order(mem.get(), bdf ? options_.cvode.max_order : options_.arkode.order),
+        "SetOrder");
+  check(api.set_max_steps(mem.get(), control.max_steps), "SetMaxNumSteps");
   check(api.set_stop_time(mem.get(), options_.duration), "SetStopTime");
-  check(api.set_postprocess(mem.get(), internal_step_done), "SetPostprocessStepFn");
-  if (o.fixed_step) check(api.set_fixed_step(mem.get(), options_.time_step), "SetFixedStep");
+  // BDF of order 3 to 5 is not stable on the whole imaginary axis, where undamped elastic modes
+  // lie: CVODE's stability limit detection lowers the order where it sees them grow.
+  if (bdf) check(CVodeSetStabLimDet(mem.get(), SUNTRUE), "CVodeSetStabLimDet");
+  if (api.set_postprocess)
+    check(api.set_postprocess(mem.get(), internal_step_done), "SetPostprocessStepFn");
+  if (!bdf && options_.arkode.fixed_step)
+    check(api.set_fixed_step(mem.get(), options_.time_step), "SetFixedStep");
+
+  // Advances y to the output time `target` (t: the time reached). ARKODE steps past it and
+  // interpolates; CVODE is taken one internal step at a time (each handed to internal_step_done,
+  // as ARKODE's post-step hook does; its own step limit counts within one call, so the interval's
+  // is kept here), then interpolated back to the target.
+  realtype reached = 0;  // CVODE: the end of its last internal step
+  const auto advance = [&](double target, realtype& t) {
+    if (!bdf) return api.evolve(mem.get(), target, y.get(), &t, ARK_NORMAL);
+    for (long taken = 0; reached < target; ++taken) {
+      t = reached;
+      if (taken == control.max_steps) {
+        data.error = "more than " + std::to_string(control.max_steps) +
+                     " internal steps in the output interval";
+        return CV_TOO_MUCH_WORK;
+      }
+      const int flag = api.evolve(mem.get(), target, y.get(), &reached, CV_ONE_STEP);
+      if (flag < 0) return flag;
+      internal_step_done(reached, y.get(), &data);
+    }
+    t = target;
+    return CVodeGetDky(mem.get(), target, 0, y.get());
+  };
 
   const Index steps = time_step_count(options_);
   long internal_before = 0;
@@ -336,21 +439,22 @@ void ArkodeStepper::run(Points& x, Points& v) {
     data.interval = NewtonResult();
     data.target = target;
     realtype t = 0;
-    const int flag = api.evolve(mem.get(), target, y.get(), &t, ARK_NORMAL);
+    const int flag = advance(target, t);
     if (flag < 0) {
       char* name = api.flag_name(flag);
       std::string why = data.error;
       if (!data.stage_failure.empty()) why += (why.empty() ? "" : "; last ") + data.stage_failure;
-      const std::string message = "arkode: " + std::string(name) + " at t = " + std::to_string(t) +
-                                  " s" + (why.empty() ? "" : ": " + why);
+      const std::string message = std::string(api.name) + ": " + name +
+                                  " at t = " + std::to_string(t) + " s" +
+                                  (why.empty() ? "" : ": " + why);
       std::free(name);
       throw SolveError(message);
     }
     const Points before = x;
     x = as_points(view(y.get()).head(n));
     constraints.impose(t / options_.duration, x);
-    // Free directions take ARKODE's velocity, constrained ones the prescribed motion over the
-    // interval.
+    // Free directions take the stepper's velocity, constrained ones the prescribed motion over
+    // the interval.
     VectorX velocity = view(y.get()).tail(n);
     VectorX prescribed = as_dofs(x - before) / (t - t_start);
     constraints.project(velocity);
@@ -359,11 +463,11 @@ void ArkodeStepper::run(Points& x, Points& v) {
     v = as_points(velocity + prescribed - free_part);
     long internal = 0;
     api.num_steps(mem.get(), &internal);
-    // ERKStep: no solve, iterations = internal Runge-Kutta steps of the interval; ARKStep: the
-    // Newton work of its stage solves.
+    // ERKStep: no solve, iterations = internal Runge-Kutta steps of the interval; ARKStep and
+    // CVODE: the Newton work of their stage (step) solves.
     NewtonResult step = data.interval;
     step.converged = true;
-    if (!dirk) step.iterations = static_cast<int>(internal - internal_before);
+    if (!implicit) step.iterations = static_cast<int>(internal - internal_before);
     if (step.residuals.empty()) step.residuals.push_back(0.0);
     internal_before = internal;
     t_start = t;
