@@ -55,13 +55,15 @@ bool restartable(const Scene& scene) {
 }
 
 /// What the restart record of every step holds: the acceleration Newmark and generalized-alpha
-/// carry, the viscoelastic history; nothing for a static run or one that cannot restart.
+/// carry, the force symplectic Euler carries, the viscoelastic history; nothing for a static run
+/// or one that cannot restart.
 RestartLayout restart_layout(const Scene& scene, const SceneModel& model) {
   if (scene.analysis == Analysis::kStatic || !restartable(scene)) return {};
   const Integrator integrator = scene.dynamic_options.integrator;
   return {.acceleration =
               integrator == Integrator::kNewmark || integrator == Integrator::kGeneralizedAlpha,
-          .history_columns = model.elasticity ? model.elasticity->history_columns() : 0};
+          .history_columns = model.elasticity ? model.elasticity->history_columns() : 0,
+          .force = integrator == Integrator::kSymplecticEuler};
 }
 
 /// The names of the materials of each body, and of each element region of each body (regions
@@ -291,7 +293,9 @@ Start starting_state(const Scene& scene, SceneModel& model, const RunOptions& op
   RestartRecord record =
       read_restart_record(options.restart, state.index, restart_layout(scene, model));
   start.v = state.v;
-  start.dynamic = {.time = state.load, .acceleration = std::move(record.acceleration)};
+  start.dynamic = {.time = state.load,
+                   .acceleration = std::move(record.acceleration),
+                   .force = std::move(record.force)};
   // The history as the step left it, at the time (as a fraction of the duration) the step set.
   if (record.history.size() > 0)
     model.elasticity->restore_history(record.history, state.load / duration);
@@ -322,7 +326,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   // no step completed after it, and a failed attempt leaves the acceleration and the history
   // as the last completed step left them).
   const RestartLayout layout = restart_layout(scene, *model);
-  const Points* carried_acceleration = nullptr;  // the lifecycle's, set before the run
+  const StepLifecycle* running = nullptr;  // the run's lifecycle, set before the run
   const auto write = [&](const StepRecord& step, const Points& x, const Points* v) {
     ElementFields elements;
     if (fields.stress || fields.strain) {
@@ -337,7 +341,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
       elements.viscous_stress = model->elasticity->viscous_stress(x);
     }
     RestartRecord record;
-    if (layout.acceleration) record.acceleration = *carried_acceleration;
+    if (layout.acceleration) record.acceleration = running->acceleration();
+    if (layout.force) record.force = as_points(running->last_gradient());
     if (layout.history_columns > 0) record.history = model->elasticity->history_state();
     PhaseTimers::Scope t(result.timers, "output: results file");
     file->append_step(step, x, v, &elements, layout.empty() ? nullptr : &record);
@@ -375,7 +380,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     if (options.observer) options.observer(step, x);
   };
   StepLifecycle lifecycle(model->system, model->constraints, model->lifecycle_terms(), on_step);
-  carried_acceleration = &lifecycle.acceleration();
+  running = &lifecycle;
   drive(scene, *model, lifecycle, from, result);
   if (pending) {
     try {

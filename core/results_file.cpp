@@ -560,12 +560,16 @@ hsize_t create_restart_datasets(const H5File& f, const RestartLayout& layout, In
     f.create_rows("/restart/acceleration", H5Type<double>::file(), {hsize_t(nodes), 3});
     bytes += hsize_t(nodes) * 3 * sizeof(double);
   }
+  if (layout.force) {
+    f.create_rows("/restart/force", H5Type<double>::file(), {hsize_t(nodes), 3});
+    bytes += hsize_t(nodes) * 3 * sizeof(double);
+  }
   if (layout.history_columns > 0) {
     f.create_rows("/restart/history", H5Type<double>::file(),
                   {hsize_t(tets), hsize_t(layout.history_columns)});
     bytes += hsize_t(tets) * hsize_t(layout.history_columns) * sizeof(double);
   }
-  return bytes + 3 * 36 * 1024;
+  return bytes + 4 * 36 * 1024;
 }
 
 /// /steps with an empty dataset per step field, and /timing; returns the bytes a step may add
@@ -684,6 +688,8 @@ void ResultsFile::State::check_step(const StepRecord& step, const Points& x, con
            (restart ? ": a restart record given to a run without" : ": restart record missing"));
   if (restart && info.restart.acceleration)
     expect_rows("acceleration", restart->acceleration.rows(), num_nodes(), "#nodes");
+  if (restart && info.restart.force)
+    expect_rows("force", restart->force.rows(), num_nodes(), "#nodes");
   if (restart && info.restart.history_columns > 0) {
     expect_rows("history", restart->history.rows(), tets, "#tets");
     if (restart->history.cols() != info.restart.history_columns)
@@ -718,6 +724,7 @@ hsize_t ResultsFile::State::write_rows(const StepRecord& step, const Points& x, 
     if (info.restart.acceleration)
       f.write_row("/restart/acceleration", slot, restart->acceleration);
     if (info.restart.history_columns > 0) f.write_row("/restart/history", slot, restart->history);
+    if (info.restart.force) f.write_row("/restart/force", slot, restart->force);
   }
   f.write_row("/steps/load", k, step.load);
   f.write_row("/steps/settling", k, std::int32_t(step.settling));
@@ -991,6 +998,13 @@ RestartRecord read_restart_record(const std::string& path, Index step,
           "acceleration (another integrator than newmark or generalized_alpha)");
     out.acceleration =
         restart_rows(file, "/restart/acceleration", *slot, nodes, 3, "the nodes of /mesh/X", step);
+  }
+  if (layout.force) {
+    if (!file.exists("/restart/force"))
+      file.fail(
+          "has no dataset /restart/force: the run that wrote it carried no force (another "
+          "integrator than symplectic_euler)");
+    out.force = restart_rows(file, "/restart/force", *slot, nodes, 3, "the nodes of /mesh/X", step);
   }
   if (layout.history_columns > 0) {
     if (!history)

@@ -33,7 +33,7 @@
 ///   /restart (runs whose RunInfo::restart is not empty): two slots of the restart record of the
 ///   last two written steps, a row of each dataset per slot: step (the step the slot holds, -1:
 ///   none; set to -1 and flushed before the slot is overwritten, and to the step after the step's
-///   rows are flushed, before its index), acceleration, history.
+///   rows are flushed, before its index), acceleration, history, force.
 /// The sidecars' blocks: one per body, except that a body with several element regions has one
 /// per region (the body's nodes, the region's tets). The sidecar's time of a step is its load
 /// (time-dependent runs: its time); ParaView shows one state per distinct time, so the settling
@@ -71,13 +71,17 @@ struct ResultFields {
 struct RestartRecord {
   Points acceleration;      ///< #nodes x 3 [m/s^2] (Newmark, generalized-alpha); empty otherwise
   Eigen::MatrixXd history;  ///< #tets x columns: Elasticity::history_state(); empty without
+  /// #nodes x 3 [N]: grad E at the step as completing it evaluated it, the next step's force
+  /// (symplectic Euler); empty otherwise
+  Points force;
 };
 
 /// Which parts of a RestartRecord a run writes, fixed when its file is created.
 struct RestartLayout {
   bool acceleration = false;
   Index history_columns = 0;  ///< columns of RestartRecord::history; 0: none
-  bool empty() const { return !acceleration && history_columns == 0; }
+  bool force = false;
+  bool empty() const { return !acceleration && history_columns == 0 && !force; }
 };
 
 /// Metadata of a run written to /run at creation, and what its steps will hold.

@@ -53,6 +53,9 @@ void SymplecticEuler::run(Points& x, Points& v, const DynamicStart& start) {
   double t = start.time;
   lifecycle_.begin(x, t / options_.duration);
   double energy = lifecycle_.gradient(x, g);
+  // A restart's force: the one the uninterrupted run evaluated when it completed the step (a
+  // viscoelastic history forms it before that step is accepted; after, it agrees to round-off).
+  if (start.force.size() > 0) g = as_dofs(start.force);
   for (Index n = first_step_after(options_, t); n < steps; ++n) {
     const double t_next = step_end_time(options_, n), h = t_next - t;
     if (!std::isfinite(energy)) {
