@@ -79,9 +79,9 @@ void declare(CLI::App& app, Arguments& a) {
       ->type_name("PATH=VALUE")
       ->allow_extra_args(false)  // one value each: in `--set a=1 b=2`, b=2 is an argument of run
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  CLI::Option* restart =
-      run->add_option("--restart", a.restart, "start from a step of an earlier run (static)")
-          ->type_name("EARLIER.h5");
+  CLI::Option* restart = run->add_option("--restart", a.restart,
+                                         "start from a written step of an earlier run of the scene")
+                             ->type_name("EARLIER.h5");
   run->add_option("--step", a.step, "the step of EARLIER.h5 to start from (default: last)")
       ->type_name("N")
       ->needs(restart);

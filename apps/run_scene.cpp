@@ -46,6 +46,26 @@ ResultFields result_fields(const Scene& scene) {
   return fields;
 }
 
+/// Whether the scene's integrator can go on from a completed step of a results file: every one
+/// but ARKODE's, whose adaptive step size and error history no results file holds.
+bool restartable(const Scene& scene) {
+  const Integrator integrator = scene.dynamic_options.integrator;
+  return scene.analysis == Analysis::kStatic ||
+         (integrator != Integrator::kArkode && integrator != Integrator::kArkodeDirk);
+}
+
+/// What the restart record of every step holds: the acceleration Newmark and generalized-alpha
+/// carry, the force symplectic Euler carries, the viscoelastic history; nothing for a static run
+/// or one that cannot restart.
+RestartLayout restart_layout(const Scene& scene, const SceneModel& model) {
+  if (scene.analysis == Analysis::kStatic || !restartable(scene)) return {};
+  const Integrator integrator = scene.dynamic_options.integrator;
+  return {.acceleration =
+              integrator == Integrator::kNewmark || integrator == Integrator::kGeneralizedAlpha,
+          .history_columns = model.elasticity ? model.elasticity->history_columns() : 0,
+          .force = integrator == Integrator::kSymplecticEuler};
+}
+
 /// The names of the materials of each body, and of each element region of each body (regions
 /// body after body, as RunInfo::region_materials); "rigid" for a rigid body and its regions.
 struct MaterialNames {
@@ -119,27 +139,36 @@ std::unique_ptr<ResultsFile> open_results(const Scene& scene, const RunOptions& 
                .body_materials = std::move(materials.bodies),
                .region_materials = std::move(materials.regions),
                .fields = fields,
-               .initial_velocity = fields.velocity ? scene.initial_velocity : Points()};
+               .initial_velocity = fields.velocity ? scene.initial_velocity : Points(),
+               .restart = restart_layout(scene, model)};
   for (const Constraint& c : scene.constraints) info.constraint_names.push_back(c.name);
   return std::make_unique<ResultsFile>(options.out, scene.mesh, model.depth, info);
 }
 
-// Runs the scene's analysis from (result.x, start_load) through the lifecycle; a failure (a
-// solve that cannot go on, a step the results file refused, memory) is the result's message.
-void drive(const Scene& scene, SceneModel& model, StepLifecycle& lifecycle, double start_load,
+// Where a run starts besides its positions: at rest, or where a completed step of an earlier
+// run left off (--restart).
+struct Start {
+  double load = 0;       // static: the load factor
+  Points v;              // time-dependent: the velocities
+  DynamicStart dynamic;  // time-dependent: the time and the acceleration carried
+};
+
+// Runs the scene's analysis from (result.x, start) through the lifecycle; a failure (a solve
+// that cannot go on, a step the results file refused, memory) is the result's message.
+void drive(const Scene& scene, SceneModel& model, StepLifecycle& lifecycle, Start start,
            RunResult& result) {
   const DynamicOptions& dyn = model.dynamic_options;
   try {
     if (scene.analysis == Analysis::kStatic) {
       StaticSolver(lifecycle, model.quasi_viscosity, model.static_options)
-          .run(result.x, start_load);
+          .run(result.x, start.load);
     } else {
-      Points v = scene.initial_velocity;
+      Points& v = start.v;
       switch (dyn.integrator) {
         case Integrator::kImplicitEuler:
         case Integrator::kNewmark:
         case Integrator::kGeneralizedAlpha:
-          ImplicitStepper(lifecycle, model.implicit, dyn).run(result.x, v);
+          ImplicitStepper(lifecycle, model.implicit, dyn).run(result.x, v, start.dynamic);
           break;
         case Integrator::kArkodeDirk:
         case Integrator::kCvodeBdf:
@@ -149,7 +178,7 @@ void drive(const Scene& scene, SceneModel& model, StepLifecycle& lifecycle, doub
           SymplecticEuler(
               lifecycle, model.lumped_mass, dyn,
               critical_time_step(scene.mesh.X, scene.mesh.tets, scene.tet_density, scene.groups))
-              .run(result.x, v);
+              .run(result.x, v, start.dynamic);
           break;
         case Integrator::kArkode:
           SundialsStepper(lifecycle, model.lumped_mass, dyn).run(result.x, v);
@@ -184,7 +213,7 @@ void finish_results(ResultsFile& file, RunResult& result) {
 
 }  // namespace
 
-StepState restart_state(const std::string& path, Index step, const Mesh& mesh) {
+StepState restart_state(const std::string& path, Index step, const Mesh& mesh, Analysis analysis) {
   const auto refuse = [&](const std::string& why) {
     throw InputError(located(path, 0, "cannot restart from it: " + why));
   };
@@ -194,14 +223,20 @@ StepState restart_state(const std::string& path, Index step, const Mesh& mesh) {
            std::to_string(previous.num_tets) + " tets, the scene " +
            std::to_string(mesh.num_nodes()) + " and " + std::to_string(mesh.num_tets()));
   }
-  if (previous.analysis != "static") refuse("its /run attribute analysis is not static");
+  if (previous.analysis != to_string(analysis))
+    refuse("its /run attribute analysis is " + previous.analysis + ", the scene's " +
+           to_string(analysis));
   check_results_mesh(path, mesh);
   const StepState state = read_step_state(path, step);
+  const std::string of_step = "step " + std::to_string(state.index);
   if (state.x.rows() != mesh.num_nodes() || !state.x.allFinite())
-    refuse("step " + std::to_string(state.index) + " has no finite #nodes x 3 positions");
-  if (!(state.load >= 0 && state.load <= 1))
-    refuse("step " + std::to_string(state.index) + " has load " + std::to_string(state.load) +
-           ", not a load factor in [0, 1]");
+    refuse(of_step + " has no finite #nodes x 3 positions");
+  if (analysis == Analysis::kStatic && !(state.load >= 0 && state.load <= 1))
+    refuse(of_step + " has load " + std::to_string(state.load) + ", not a load factor in [0, 1]");
+  if (analysis != Analysis::kStatic && !(state.load >= 0))
+    refuse(of_step + " has time " + std::to_string(state.load) + " s, not a time >= 0");
+  if (analysis != Analysis::kStatic && state.v.rows() != mesh.num_nodes())
+    refuse(of_step + " has no velocities (/steps/v)");
   return state;
 }
 
@@ -227,19 +262,47 @@ void print_timing(const PhaseTimers& timers, double total, std::ostream& out) {
 
 namespace {
 
-// The starting state into x: the reference, or a completed step of an earlier run of this scene
-// (--restart); returns its load factor.
-double starting_state(const Scene& scene, const RunOptions& options, std::ostream& log, Points& x) {
+// The starting state, positions into x: the reference at rest, or a completed step of an
+// earlier run of this scene (--restart) with, for a time-dependent run, its time, velocities and
+// restart record (the acceleration carried, the viscoelastic history, restored into the model).
+Start starting_state(const Scene& scene, SceneModel& model, const RunOptions& options,
+                     std::ostream& log, Points& x) {
   x = scene.mesh.X;
-  if (options.restart.empty()) return 0;
-  if (scene.analysis != Analysis::kStatic)
-    throw InputError(located(options.restart, 0,
-                             "cannot restart from it: restarts are for static analyses only"));
-  const StepState state = restart_state(options.restart, options.restart_step, scene.mesh);
+  Start start{.load = 0, .v = scene.initial_velocity, .dynamic = {}};
+  if (options.restart.empty()) return start;
+  const auto refuse = [&](const std::string& why) {
+    throw InputError(located(options.restart, 0, "cannot restart from it: " + why));
+  };
+  if (!restartable(scene))
+    refuse(
+        "the scene's integrator (arkode or arkode_dirk) keeps an adaptive step size and error "
+        "history that no results file holds; restart with implicit_euler, newmark, "
+        "generalized_alpha or symplectic_euler");
+  const StepState state =
+      restart_state(options.restart, options.restart_step, scene.mesh, scene.analysis);
   x = state.x;
-  log << "restart from step " << state.index << " of " << options.restart << " at load "
-      << format("%.6g", state.load) << std::endl;
-  return state.load;
+  if (scene.analysis == Analysis::kStatic) {
+    log << "restart from step " << state.index << " of " << options.restart << " at load "
+        << format("%.6g", state.load) << std::endl;
+    start.load = state.load;
+    return start;
+  }
+  const double duration = model.dynamic_options.duration;
+  if (!(state.load < duration))
+    refuse("step " + std::to_string(state.index) + " ends at t = " + format("%.12g", state.load) +
+           " s, the scene's duration is " + format("%.12g", duration) + " s: nothing is left");
+  RestartRecord record =
+      read_restart_record(options.restart, state.index, restart_layout(scene, model));
+  start.v = state.v;
+  start.dynamic = {.time = state.load,
+                   .acceleration = std::move(record.acceleration),
+                   .force = std::move(record.force)};
+  // The history as the step left it, at the time (as a fraction of the duration) the step set.
+  if (record.history.size() > 0)
+    model.elasticity->restore_history(record.history, state.load / duration);
+  log << "restart from step " << state.index << " of " << options.restart
+      << " at t = " << format("%.6g", state.load) << " s" << std::endl;
+  return start;
 }
 
 }  // namespace
@@ -251,7 +314,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   RunResult result;
   const std::unique_ptr<SceneModel> model = build_scene_model(scene, result.timers);
   const Mesh& mesh = scene.mesh;
-  const double start_load = starting_state(scene, options, log, result.x);
+  const Start from = starting_state(scene, *model, options, log, result.x);
   const std::unique_ptr<ResultsFile> file = open_results(scene, options, *model, threads);
   const ResultFields fields = result_fields(scene);
   log << "scene " << scene.name << ": " << mesh.num_nodes() << " nodes, " << mesh.num_tets()
@@ -259,7 +322,12 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
       << to_string(model->static_options.newton.linear.kind) << ", Newton tolerance "
       << format("%.3g", scene.tolerance) << " x E h^2 per dof" << std::endl;
 
-  // Writes a completed step into the results file.
+  // Writes a completed step into the results file, with the restart record of the model's
+  // state: the last completed step is the one written (or the pending one, written at the end:
+  // no step completed after it, and a failed attempt leaves the acceleration and the history
+  // as the last completed step left them).
+  const RestartLayout layout = restart_layout(scene, *model);
+  const StepLifecycle* running = nullptr;  // the run's lifecycle, set before the run
   const auto write = [&](const StepRecord& step, const Points& x, const Points* v) {
     ElementFields elements;
     if (fields.stress || fields.strain) {
@@ -273,8 +341,12 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
       PhaseTimers::Scope t(result.timers, "output: element fields");
       elements.viscous_stress = model->elasticity->viscous_stress(x);
     }
+    RestartRecord record;
+    if (layout.acceleration) record.acceleration = running->acceleration();
+    if (layout.force) record.force = as_points(running->last_gradient());
+    if (layout.history_columns > 0) record.history = model->elasticity->history_state();
     PhaseTimers::Scope t(result.timers, "output: results file");
-    file->append_step(step, x, v, &elements);
+    file->append_step(step, x, v, &elements, layout.empty() ? nullptr : &record);
     file->write_timing(result.timers.phases());  // a run killed later keeps its timing so far
   };
   // The last completed step not written (output every N > 1 steps), written when the run ends.
@@ -309,7 +381,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     if (options.observer) options.observer(step, x);
   };
   StepLifecycle lifecycle(model->system, model->constraints, model->lifecycle_terms(), on_step);
-  drive(scene, *model, lifecycle, start_load, result);
+  running = &lifecycle;
+  drive(scene, *model, lifecycle, from, result);
   if (pending) {
     try {
       write(pending->step, pending->x, pending->has_v ? &pending->v : nullptr);

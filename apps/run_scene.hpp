@@ -16,8 +16,9 @@ namespace depthfem {
 struct RunOptions {
   std::string out;  ///< results file (.h5); empty: no file
   int threads = 0;  ///< 0: all cores
-  /// Static analysis only: a results file of the same scene whose step `restart_step` (the last
-  /// one when < 0) is the starting state (positions and load factor); empty: start at rest.
+  /// A results file of the same scene whose step `restart_step` (the last one when < 0) is the
+  /// starting state: positions and load factor (static); positions, time, velocities and the
+  /// step's restart record (time-dependent, every integrator but ARKODE's); empty: start at rest.
   std::string restart;
   Index restart_step = -1;
   /// Called after every completed step with its record and positions (e.g. to sample a
@@ -41,10 +42,11 @@ struct RunResult {
 RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream& log);
 
 /// The starting state of a restart (RunOptions::restart): step `step` (the last one when < 0)
-/// of the results file `path`, which a static run of a scene with `mesh` must have written (the
-/// same nodes and tets, not only as many), with finite positions and a load factor in [0, 1];
-/// throws InputError naming the file (and the dataset at fault) otherwise.
-StepState restart_state(const std::string& path, Index step, const Mesh& mesh);
+/// of the results file `path`, which a run of `analysis` of a scene with `mesh` must have written
+/// (the same nodes and tets, not only as many), with finite positions and a load factor in
+/// [0, 1] (static) or a time >= 0 and finite velocities (time-dependent); throws InputError
+/// naming the file (and the dataset at fault) otherwise.
+StepState restart_state(const std::string& path, Index step, const Mesh& mesh, Analysis analysis);
 
 /// Prints the phase timing table of a run (seconds and share of the total).
 void print_timing(const PhaseTimers& timers, double total_seconds, std::ostream& out);

@@ -21,7 +21,7 @@ struct SceneModel {
   Constraints constraints;
   VectorX lumped_mass;  ///< per node [kg]
   VectorX depth;        ///< material depth per node [m]; empty without material-depth contact
-  const Elasticity* elasticity = nullptr;
+  Elasticity* elasticity = nullptr;               ///< a restart restores its viscoelastic history
   const NodalVolume* nodal_volume = nullptr;      ///< with nodal-pressure material groups
   const MaterialDepthContact* contact = nullptr;  ///< material-depth contact, when on
   NodalSpring* quasi_viscosity = nullptr;         ///< static analysis with quasi_viscosity > 0

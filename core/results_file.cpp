@@ -350,11 +350,12 @@ struct ResultsFile::State {
   /// Throws naming the step when it does not fit the run: out of order, past kMaxSteps, arrays
   /// of other sizes, other contact interfaces.
   void check_step(const StepRecord& step, const Points& x, const Points* v,
-                  const ElementFields* elements) const;
-  /// Writes every dataset of the step at the next row, then its index (a reader counts the rows
-  /// of /steps/index, so a step is in the file once its index is), each flushed; returns the row.
+                  const ElementFields* elements, const RestartRecord* restart) const;
+  /// Writes every dataset of the step at the next row and its restart record into a slot, then
+  /// its index (a reader counts the rows of /steps/index, so a step is in the file once its
+  /// index is), each flushed; returns the row.
   hsize_t write_rows(const StepRecord& step, const Points& x, const Points* v,
-                     const ElementFields* elements) const;
+                     const ElementFields* elements, const RestartRecord* restart) const;
 
   /// Every dataset of /steps this run writes.
   std::vector<StepDataset> step_datasets() const {
@@ -542,6 +543,35 @@ void write_reference(const H5File& f, const Mesh& mesh, const RunInfo& info) {
   }
 }
 
+/// The slots of the restart record: the last two written steps' (see write_rows).
+constexpr hsize_t kRestartSlots = 2;
+
+/// /restart with its two slots, each marked empty (step -1), when the run writes a restart
+/// record; returns the bytes a step's record may add to the file.
+hsize_t create_restart_datasets(const H5File& f, const RestartLayout& layout, Index nodes,
+                                Index tets) {
+  if (layout.empty()) return 0;
+  f.create_group("/restart");
+  f.create_rows("/restart/step", H5Type<std::int32_t>::file(), {});
+  for (hsize_t slot = 0; slot < kRestartSlots; ++slot)
+    f.write_row("/restart/step", slot, std::int32_t(-1));
+  hsize_t bytes = 0;
+  if (layout.acceleration) {
+    f.create_rows("/restart/acceleration", H5Type<double>::file(), {hsize_t(nodes), 3});
+    bytes += hsize_t(nodes) * 3 * sizeof(double);
+  }
+  if (layout.force) {
+    f.create_rows("/restart/force", H5Type<double>::file(), {hsize_t(nodes), 3});
+    bytes += hsize_t(nodes) * 3 * sizeof(double);
+  }
+  if (layout.history_columns > 0) {
+    f.create_rows("/restart/history", H5Type<double>::file(),
+                  {hsize_t(tets), hsize_t(layout.history_columns)});
+    bytes += hsize_t(tets) * hsize_t(layout.history_columns) * sizeof(double);
+  }
+  return bytes + 4 * 36 * 1024;
+}
+
 /// /steps with an empty dataset per step field, and /timing; returns the bytes a step may add
 /// to the file besides its residuals: its rows, a new chunk of each small dataset (4 KiB), the
 /// chunk indices (up to a 1024-entry page of each) and other metadata.
@@ -583,7 +613,8 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
     write_mesh(f, mesh, depth, info, blocks);
     write_run(f, info);
     write_reference(f, mesh, info);
-    s.step_reserve = create_step_datasets(f, s.step_datasets());
+    s.step_reserve = create_step_datasets(f, s.step_datasets()) +
+                     create_restart_datasets(f, info.restart, mesh.num_nodes(), mesh.num_tets());
     f.start_swmr_write();
     f.flush();
     f.rename(path);
@@ -616,7 +647,8 @@ ResultsFile::ResultsFile(const std::string& path, const Mesh& mesh, const Vector
 ResultsFile::~ResultsFile() = default;
 
 void ResultsFile::State::check_step(const StepRecord& step, const Points& x, const Points* v,
-                                    const ElementFields* elements) const {
+                                    const ElementFields* elements,
+                                    const RestartRecord* restart) const {
   const H5File& f = file;
   const ResultFields& fields = info.fields;
   const std::string what = "step " + std::to_string(step.index);
@@ -651,6 +683,19 @@ void ResultsFile::State::check_step(const StepRecord& step, const Points& x, con
     expect_rows("volume_ratio", elements->volume_ratio.rows(), tets, "#tets");
   }
   if (fields.contact) expect_rows("surface", step.surface.area.rows(), tris.rows(), "#tris");
+  if (bool(restart) == info.restart.empty())
+    f.fail(what +
+           (restart ? ": a restart record given to a run without" : ": restart record missing"));
+  if (restart && info.restart.acceleration)
+    expect_rows("acceleration", restart->acceleration.rows(), num_nodes(), "#nodes");
+  if (restart && info.restart.force)
+    expect_rows("force", restart->force.rows(), num_nodes(), "#nodes");
+  if (restart && info.restart.history_columns > 0) {
+    expect_rows("history", restart->history.rows(), tets, "#tets");
+    if (restart->history.cols() != info.restart.history_columns)
+      f.fail(what + ": the viscoelastic history has " + std::to_string(restart->history.cols()) +
+             " columns, the run declared " + std::to_string(info.restart.history_columns));
+  }
   std::vector<std::string> contact_names;
   for (const InterfaceForce& c : step.contact) contact_names.push_back(c.name);
   if (contact_names != info.contact_names)
@@ -658,7 +703,8 @@ void ResultsFile::State::check_step(const StepRecord& step, const Points& x, con
 }
 
 hsize_t ResultsFile::State::write_rows(const StepRecord& step, const Points& x, const Points* v,
-                                       const ElementFields* elements) const {
+                                       const ElementFields* elements,
+                                       const RestartRecord* restart) const {
   const H5File& f = file;
   const ResultFields& fields = info.fields;
   // Every dataset of the step at row k, then the index: a reader counts the rows of
@@ -667,6 +713,19 @@ hsize_t ResultsFile::State::write_rows(const StepRecord& step, const Points& x, 
   const H5File::Reservation reserved =
       f.reserve(step_reserve + step.residuals.size() * sizeof(double));
   const hsize_t k = hsize_t(num_steps);
+  // The restart record goes into the slot of the step before last, marked empty (and flushed)
+  // before it is overwritten and marked with the step once the step's rows are flushed: a slot
+  // marked with a step holds that step's record at every moment, and the last written step's
+  // slot is never the one being overwritten.
+  const hsize_t slot = k % kRestartSlots;
+  if (restart) {
+    f.write_row("/restart/step", slot, std::int32_t(-1));
+    f.flush();
+    if (info.restart.acceleration)
+      f.write_row("/restart/acceleration", slot, restart->acceleration);
+    if (info.restart.history_columns > 0) f.write_row("/restart/history", slot, restart->history);
+    if (info.restart.force) f.write_row("/restart/force", slot, restart->force);
+  }
   f.write_row("/steps/load", k, step.load);
   f.write_row("/steps/settling", k, std::int32_t(step.settling));
   f.write_row("/steps/newton_iterations", k, std::int32_t(step.newton_iterations));
@@ -723,16 +782,20 @@ hsize_t ResultsFile::State::write_rows(const StepRecord& step, const Points& x, 
     f.write_row("/steps/contact_fraction", k, surface.fraction);
   }
   f.flush();
+  if (restart) {
+    f.write_row("/restart/step", slot, std::int32_t(step.index));
+    f.flush();
+  }
   f.write_row("/steps/index", k, std::int32_t(step.index));
   f.flush();
   return k;
 }
 
 void ResultsFile::append_step(const StepRecord& step, const Points& x, const Points* v,
-                              const ElementFields* elements) {
+                              const ElementFields* elements, const RestartRecord* restart) {
   State& s = *state_;
-  s.check_step(step, x, v, elements);
-  const hsize_t k = s.write_rows(step, x, v, elements);
+  s.check_step(step, x, v, elements, restart);
+  const hsize_t k = s.write_rows(step, x, v, elements, restart);
   ++s.num_steps;
   s.last_index = step.index;
   s.num_residuals += step.residuals.size();
@@ -862,13 +925,97 @@ StepState read_step_state(const std::string& path, Index step) {
   checked_dims(file, "/steps/load", H5T_FLOAT, {kAny}, "one value per step");
   out.load = finite_number(file, "/steps/load", file.read_rows("/steps/load", row, 1)[0], of_step);
   const Index nodes = checked_rows(file, "/mesh/X", H5T_FLOAT, 3, "#nodes x 3");
-  checked_dims(file, "/steps/x", H5T_FLOAT, {kAny, hsize_t(nodes), 3},
-               "#steps x " + std::to_string(nodes) + " x 3 (the nodes of /mesh/X)");
-  const std::vector<double> x = file.read_rows("/steps/x", row, 1);
-  for (size_t k = 0; k < x.size(); ++k)
-    finite_number(file, "/steps/x", x[k], of_step + ", node " + std::to_string(k / 3));
-  out.x = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(x.data(),
-                                                                                      nodes, 3);
+  const auto node_rows = [&](const std::string& name) -> Points {
+    checked_dims(file, name, H5T_FLOAT, {kAny, hsize_t(nodes), 3},
+                 "#steps x " + std::to_string(nodes) + " x 3 (the nodes of /mesh/X)");
+    const std::vector<double> values = file.read_rows(name, row, 1);
+    for (size_t k = 0; k < values.size(); ++k)
+      finite_number(file, name, values[k], of_step + ", node " + std::to_string(k / 3));
+    return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
+        values.data(), nodes, 3);
+  };
+  out.x = node_rows("/steps/x");
+  if (file.exists("/steps/v")) out.v = node_rows("/steps/v");
+  return out;
+}
+
+namespace {
+
+/// Row `slot` of dataset `name` of #slots x `nodes_or_tets` x `columns` finite doubles (`rows`:
+/// what the middle dimension counts, for messages), as a matrix; throws naming the file and the
+/// dataset when it is not one.
+Eigen::MatrixXd restart_rows(const H5File& file, const std::string& name, hsize_t slot, Index rows,
+                             Index columns, const std::string& rows_text, Index step) {
+  checked_dims(file, name, H5T_FLOAT, {kAny, hsize_t(rows), hsize_t(columns)},
+               "#slots x " + std::to_string(rows) + " x " + std::to_string(columns) + " (" +
+                   rows_text + ")");
+  const std::vector<double> values = file.read_rows(name, slot, 1);
+  for (size_t k = 0; k < values.size(); ++k)
+    finite_number(file, name, values[k],
+                  "step " + std::to_string(step) + ", row " + std::to_string(k / size_t(columns)));
+  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+      values.data(), rows, columns);
+}
+
+}  // namespace
+
+RestartRecord read_restart_record(const std::string& path, Index step,
+                                  const RestartLayout& layout) {
+  const H5File file = open_results(path);
+  step_row(file, step_indices(file), step);
+  RestartRecord out;
+  const bool history = file.exists("/restart/history");
+  if (layout.history_columns == 0 && history)
+    file.fail(
+        "holds a viscoelastic history (/restart/history), and the scene has no "
+        "viscoelastic material: it was written for another scene");
+  if (layout.empty()) return out;
+  if (!file.exists("/restart"))
+    file.fail("has no restart record (/restart): " +
+              std::string(layout.acceleration ? "the scene's integrator carries an acceleration"
+                                              : "the scene has viscoelastic materials") +
+              ", which the run that wrote it did not");
+  checked_dims(file, "/restart/step", H5T_INTEGER, {kRestartSlots}, "one step per slot (2)");
+  const std::vector<double> marks = file.read_rows("/restart/step", 0, kRestartSlots);
+  std::optional<hsize_t> slot;
+  std::string held;
+  for (hsize_t k = 0; k < kRestartSlots; ++k) {
+    const long long mark =
+        whole_number(file, "/restart/step", marks[k], -1, std::numeric_limits<std::int32_t>::max());
+    if (mark == step) slot = k;
+    if (mark >= 0) held += (held.empty() ? "" : ", ") + std::to_string(mark);
+  }
+  if (!slot)
+    file.fail("/restart/step: no restart record of step " + std::to_string(step) +
+              " (records of steps: " + (held.empty() ? "none" : held) +
+              "; a run keeps those of its last two written steps)");
+  const Index nodes = checked_rows(file, "/mesh/X", H5T_FLOAT, 3, "#nodes x 3");
+  const Index tets = checked_rows(file, "/mesh/tets", H5T_INTEGER, 4, "#tets x 4");
+  if (layout.acceleration) {
+    if (!file.exists("/restart/acceleration"))
+      file.fail(
+          "has no dataset /restart/acceleration: the run that wrote it carried no "
+          "acceleration (another integrator than newmark or generalized_alpha)");
+    out.acceleration =
+        restart_rows(file, "/restart/acceleration", *slot, nodes, 3, "the nodes of /mesh/X", step);
+  }
+  if (layout.force) {
+    if (!file.exists("/restart/force"))
+      file.fail(
+          "has no dataset /restart/force: the run that wrote it carried no force (another "
+          "integrator than symplectic_euler)");
+    out.force = restart_rows(file, "/restart/force", *slot, nodes, 3, "the nodes of /mesh/X", step);
+  }
+  if (layout.history_columns > 0) {
+    if (!history)
+      file.fail(
+          "has no dataset /restart/history: the run that wrote it had no viscoelastic "
+          "material in time, the scene has");
+    out.history = restart_rows(file, "/restart/history", *slot, tets, layout.history_columns,
+                               "the tets of /mesh/tets, the columns of the scene's viscoelastic "
+                               "history",
+                               step);
+  }
   return out;
 }
 

@@ -29,7 +29,11 @@
 ///   velocities), contact_area, contact_forces, contact_force_magnitudes, contact_areas (with
 ///   contact interfaces), penetration (with material-depth contact), stress, von_mises, strain,
 ///   volume_ratio, contact_pressure, contact_traction, contact_gap, contact_fraction; /timing:
-///   phases (names) and seconds, one row per phase, rewritten after every step.
+///   phases (names) and seconds, one row per phase, rewritten after every step;
+///   /restart (runs whose RunInfo::restart is not empty): two slots of the restart record of the
+///   last two written steps, a row of each dataset per slot: step (the step the slot holds, -1:
+///   none; set to -1 and flushed before the slot is overwritten, and to the step after the step's
+///   rows are flushed, before its index), acceleration, history, force.
 /// The sidecars' blocks: one per body, except that a body with several element regions has one
 /// per region (the body's nodes, the region's tets). The sidecar's time of a step is its load
 /// (time-dependent runs: its time); ParaView shows one state per distinct time, so the settling
@@ -61,6 +65,25 @@ struct ResultFields {
   bool viscous = false;
 };
 
+/// What a time-dependent run carries from step to step besides positions, velocities and its
+/// time, so that a run restarted from a written step goes on exactly: written with every step
+/// into /restart (see ResultsFile), read back by read_restart_record.
+struct RestartRecord {
+  Points acceleration;      ///< #nodes x 3 [m/s^2] (Newmark, generalized-alpha); empty otherwise
+  Eigen::MatrixXd history;  ///< #tets x columns: Elasticity::history_state(); empty without
+  /// #nodes x 3 [N]: grad E at the step as completing it evaluated it, the next step's force
+  /// (symplectic Euler); empty otherwise
+  Points force;
+};
+
+/// Which parts of a RestartRecord a run writes, fixed when its file is created.
+struct RestartLayout {
+  bool acceleration = false;
+  Index history_columns = 0;  ///< columns of RestartRecord::history; 0: none
+  bool force = false;
+  bool empty() const { return !acceleration && history_columns == 0 && !force; }
+};
+
 /// Metadata of a run written to /run at creation, and what its steps will hold.
 struct RunInfo {
   std::string scene_json;                     ///< the scene file text
@@ -74,8 +97,9 @@ struct RunInfo {
   /// Per element region of the mesh (Body::regions, body after body): its material model name
   /// or "rigid".
   std::vector<std::string> region_materials;
-  ResultFields fields;      ///< the per-step fields every step will hold
-  Points initial_velocity;  ///< #nodes x 3 [m/s], when fields.velocity
+  ResultFields fields;         ///< the per-step fields every step will hold
+  Points initial_velocity;     ///< #nodes x 3 [m/s], when fields.velocity
+  RestartLayout restart = {};  ///< what every step's restart record holds (none: no /restart)
 };
 
 /// Writes a results file. Every call leaves the file flushed and complete up to that call, so a
@@ -96,12 +120,13 @@ class ResultsFile {
   ResultsFile& operator=(const ResultsFile&) = delete;
 
   /// Adds a step with positions x, velocities v (exactly when info.fields.velocity; null
-  /// otherwise) and the element fields the run writes (`elements`: null when it writes none).
-  /// Throws if its index is not above the last one's, an array does not match the mesh, a field
-  /// the run writes is missing (step.surface for contact fields), or the contact interfaces are
-  /// not info.contact_names.
+  /// otherwise), the element fields the run writes (`elements`: null when it writes none) and its
+  /// restart record (exactly when info.restart is not empty; null otherwise). Throws if its index
+  /// is not above the last one's, an array does not match the mesh or info.restart, a field the
+  /// run writes is missing (step.surface for contact fields), or the contact interfaces are not
+  /// info.contact_names.
   void append_step(const StepRecord& step, const Points& x, const Points* v,
-                   const ElementFields* elements = nullptr);
+                   const ElementFields* elements = nullptr, const RestartRecord* restart = nullptr);
   /// (Re)writes /timing with one row per (phase name, seconds), in this order.
   void write_timing(const std::vector<std::pair<std::string, double>>& phases);
   /// Sets /run status to "completed" (success) or "failed", and /run message.
@@ -150,12 +175,21 @@ struct StepState {
   Index index = 0;  ///< step index in the file
   double load = 0;  ///< load factor (static) or time [s]
   Points x;         ///< #nodes x 3 [m]
+  Points v;         ///< #nodes x 3 [m/s] where the file holds velocities; empty otherwise
 };
 
 /// Step `step` of a results file, the last one when `step` < 0, with a finite load and finite
-/// positions of the nodes of /mesh/X; throws InputError naming the file (and the dataset at
-/// fault) when it has no such step (or no steps at all) or they are not.
+/// positions (and velocities, where it holds /steps/v) of the nodes of /mesh/X; throws InputError
+/// naming the file (and the dataset at fault) when it has no such step (or no steps at all) or they
+/// are not.
 StepState read_step_state(const std::string& path, Index step = -1);
+
+/// The restart record of step `step` (its index) of a results file, as `layout` says it must
+/// hold: the /restart slot written with that step, with finite values of the shapes the layout
+/// and /mesh give. Throws InputError naming the file (and the dataset at fault) when the file
+/// holds no such record (another layout, a step whose slot was overwritten since) or a damaged
+/// one.
+RestartRecord read_restart_record(const std::string& path, Index step, const RestartLayout& layout);
 
 /// Throws InputError naming the file and the dataset unless the results file at `path` was
 /// written for `mesh`: /mesh/tets equal to its tets, /mesh/X its node positions (to 1e-9 of the

@@ -128,13 +128,26 @@ def removal(path):
     return edit
 
 
+def dynamic_scene(duration):
+    """The base block viscoelastic, pulled by Newmark steps of 0.01 s for `duration` s: its
+    results file has velocities and a restart record (acceleration, viscoelastic history)."""
+    def edit(s):
+        s["analysis"] = "dynamic"
+        s["bodies"][0]["material"] = {
+            "model": "neo_hookean", "youngs": 1e5, "poisson": 0.3,
+            "viscoelastic": {"relaxation_times": [0.01], "weights": [0.3]}}
+        s["dynamic"] = {"integrator": "newmark", "time_step": 0.01, "duration": duration}
+    return scene(edit)
+
+
 def results_files(exe):
-    """Valid results files (bytes) of runs of the base scene and of a scene with as many nodes and
-    tets but another mesh (a box twice as high)."""
+    """Valid results files (bytes) of runs of the base scene, of a scene with as many nodes and
+    tets but another mesh (a box twice as high), and of the dynamic scene over 0.02 s."""
     out = {}
     with tempfile.TemporaryDirectory() as tmp:
         for name, text in [("base", scene()),
-                           ("other", scene(setter(["bodies", 0, "mesh", "hi"], [1, 1, 2])))]:
+                           ("other", scene(setter(["bodies", 0, "mesh", "hi"], [1, 1, 2]))),
+                           ("dynamic", dynamic_scene(0.02))]:
             pathlib.Path(tmp, name + ".json").write_text(text)
             subprocess.run([exe, "run", name + ".json", "--out", name + ".h5"], cwd=tmp,
                            check=True, capture_output=True, timeout=60)
@@ -496,6 +509,31 @@ def cases(exe):
             args = ["info", "r.h5"] if command == "info" else restart
             add("results files", f"{command}: {name}", files, args=args,
                 names=[("r.h5", dataset)])
+    # A time-dependent restart (the dynamic scene run on to 0.04 s) also reads the velocities and
+    # the restart record.
+    dynamic = {"scene.json": dynamic_scene(0.04)}
+    restart = run + ["--restart", "r.h5"]
+    add("control", "dynamic restart from a valid results file", {**dynamic, "r.h5": h5["dynamic"]},
+        args=restart, control=True)
+    for name, edit, dataset in [
+            ("NaN velocity in /steps/v", lambda f: f["/steps/v"].__setitem__((1, 3, 1), nan),
+             "/steps/v"),
+            ("2.5 in /restart/step", replaced("/restart/step", data=[2.5, 1.0]), "/restart/step"),
+            ("/restart/step of 3 slots", replaced("/restart/step", data=[0, 1, -1], dtype="i4"),
+             "/restart/step"),
+            ("NaN in /restart/acceleration",
+             lambda f: f["/restart/acceleration"].__setitem__((1, 2, 0), nan),
+             "/restart/acceleration"),
+            ("/restart/history of another width",
+             replaced("/restart/history", shape=(2, 8, 12), dtype="f8"), "/restart/history"),
+            ("infinite /restart/history",
+             lambda f: f["/restart/history"].__setitem__((1, 0, 0), float("inf")),
+             "/restart/history")]:
+        add("results files", f"dynamic run --restart: {name}",
+            {**dynamic, "r.h5": altered(h5["dynamic"], edit)}, args=restart,
+            names=[("r.h5", dataset)])
+    add("results files", "dynamic run --restart: a static run's file",
+        {**dynamic, "r.h5": h5["base"]}, args=restart, names=[("r.h5", "analysis")])
     return out
 
 

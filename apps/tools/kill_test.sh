@@ -2,7 +2,9 @@
 # Crash safety of the results file: runs a small dynamic scene KILLS times, each killed with
 # SIGKILL at a random moment while `depthfem info` reads the live file, and checks that every
 # results file left behind is readable, that every step printed as completed is in it (and in
-# its sidecars), and that every step in it is bitwise equal to an uninterrupted run's.
+# its sidecars), that every step in it is bitwise equal to an uninterrupted run's, and that a run
+# restarted from its last step (positions, velocities, time, Newmark's acceleration from the
+# restart record) ends bitwise where the uninterrupted run ends.
 # Usage: kill_test.sh PATH/TO/depthfem [KILLS]   (prints the figures; exit 1 on any failure)
 set -u
 exe=$1
@@ -11,14 +13,17 @@ here=$(cd "$(dirname "$0")" && pwd)
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
-# A falling block on a floor: 3 x 2 x 2 cells, 60 Newmark steps (milliseconds each).
+# A falling block on a floor: 3 x 2 x 2 cells, 60 Newmark steps (milliseconds each). The CG
+# linear solver keeps nothing from step to step (the direct solver keeps its last factor, which a
+# restart cannot have), so that a restarted run can be compared bitwise.
 cat > "$tmp/scene.json" <<'JSON'
 {
   "name": "kill_test", "analysis": "dynamic", "gravity": [0, 0, -9.81],
   "bodies": [{"name": "block", "mesh": {"generator": "box", "lo": [0,0,0.01], "hi": [0.3,0.2,0.2],
               "cells": [3,2,2]}, "material": {"model": "neo_hookean", "youngs": 1e5, "poisson": 0.3}}],
   "obstacles": [{"name": "floor", "type": "plane", "point": [0,0,0], "normal": [0,0,1], "penalty": 1e6}],
-  "dynamic": {"integrator": "newmark", "time_step": 0.005, "duration": 0.3}
+  "dynamic": {"integrator": "newmark", "time_step": 0.005, "duration": 0.3},
+  "solver": {"linear_solver": "cg", "linear_tolerance": 1e-8}
 }
 JSON
 start=$(date +%s%N)
@@ -45,16 +50,17 @@ for ((k = 0; k < kills; k++)); do
   grep -o '^step *[0-9]*' "$tmp/run$k.log" | awk '{print $2}' > "$tmp/printed$k"
 done
 
-/usr/bin/python3 - "$tmp" "$kills" "$readers" "$reader_failures" "$here" <<'PY'
-import os, re, sys
+/usr/bin/python3 - "$tmp" "$kills" "$readers" "$reader_failures" "$here" "$exe" <<'PY'
+import os, re, subprocess, sys
 import xml.etree.ElementTree as ET
 import numpy as np
-tmp, kills, readers, reader_failures, here = sys.argv[1:6]
+tmp, kills, readers, reader_failures, here, exe = sys.argv[1:7]
 kills, readers, reader_failures = int(kills), int(readers), int(reader_failures)
 sys.path.insert(0, here)
 from results import Results
 ref = Results(os.path.join(tmp, "ref.h5"))
 corrupt = missing = unequal = no_file = printed_total = in_file = sidecar_missing = 0
+restarts = restart_failures = restart_unequal = 0
 for k in range(kills):
     printed = [int(s) for s in open(os.path.join(tmp, f"printed{k}")).read().split()]
     printed_total += len(printed)
@@ -78,6 +84,21 @@ for k in range(kills):
         if any(not np.array_equal(values[row], ref.series(name)[ref.row_of(index)])
                for name, values in fields.items()):
             unequal += 1
+    if steps and max(steps) < ref.index[-1]:  # restarted from its last step, the run ends as
+        # the uninterrupted one, bitwise
+        restarts += 1
+        out = os.path.join(tmp, f"restart{k}.h5")
+        done = subprocess.run([exe, "run", os.path.join(tmp, "scene.json"), "--out", out,
+                               "--restart", path, "--threads", "1"], capture_output=True, text=True)
+        if done.returncode != 0:
+            restart_failures += 1
+            print(f"run {k}: restart failed: {done.stderr.strip()}")
+        else:
+            with Results(out) as r:
+                if any(not np.array_equal(r.series(name)[-1], ref.series(name)[-1])
+                       for name in ("x", "v", "load")):
+                    restart_unequal += 1
+                    print(f"run {k}: the restart from step {max(steps)} ends elsewhere")
     for sidecar in (f"run{k}.xmf", f"run{k}.xdmf2"):
         # The results file is put in place before its sidecars are written: a run killed in
         # between leaves no sidecar, which is correct as long as it printed no step.
@@ -100,6 +121,8 @@ print(f"kills {kills}, steps printed {printed_total}, steps in the files {in_fil
       f"runs killed before the file existed {no_file}, corrupt files {corrupt}, "
       f"printed-but-missing steps {missing}, steps differing from the uninterrupted run "
       f"{unequal}, sidecars missing a printed step {sidecar_missing}, "
-      f"live reads {readers} (failed {reader_failures})")
-sys.exit(1 if corrupt or missing or unequal or sidecar_missing or reader_failures else 0)
+      f"live reads {readers} (failed {reader_failures}), restarts from the last step in the "
+      f"file {restarts} (failed {restart_failures}, ending elsewhere {restart_unequal})")
+sys.exit(1 if corrupt or missing or unequal or sidecar_missing or reader_failures
+         or restart_failures or restart_unequal else 0)
 PY

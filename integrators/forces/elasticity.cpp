@@ -193,6 +193,38 @@ void Elasticity::report(const Points& /*x*/, StepRecord& step) const {
   if (has_history()) step.dissipated_energy = dissipated_;
 }
 
+Index Elasticity::history_columns() const {
+  Index columns = 0;
+  for (const Group& grp : groups_)
+    if (grp.history && grp.history->timed())
+      columns = std::max(columns, Index(6 * (grp.history->terms() + 2)));
+  return columns;
+}
+
+Eigen::MatrixXd Elasticity::history_state() const {
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(num_tets_, history_columns());
+  for (const Group& grp : groups_) {
+    if (!grp.history || !grp.history->timed()) continue;
+    const Eigen::MatrixXd rows = grp.history->state();
+    for (Index e = 0; e < grp.block.size(); ++e)
+      out.row(grp.block.tet(e)).head(rows.cols()) = rows.row(e);
+  }
+  return out;
+}
+
+void Elasticity::restore_history(const Eigen::MatrixXd& state, double load) {
+  if (state.rows() != num_tets_ || state.cols() != history_columns())
+    throw std::logic_error("Elasticity::restore_history: a state of another shape");
+  for (Group& grp : groups_) {
+    if (!grp.history || !grp.history->timed()) continue;
+    Eigen::MatrixXd rows(grp.block.size(), 6 * (grp.history->terms() + 2));
+    for (Index e = 0; e < grp.block.size(); ++e)
+      rows.row(e) = state.row(grp.block.tet(e)).head(rows.cols());
+    // The time set_load(load) gives, the one accept() records.
+    grp.history->restore(rows, load * options_.duration);
+  }
+}
+
 SymmetricColumns Elasticity::viscous_stress(const Points& x) const {
   SymmetricColumns out = SymmetricColumns::Zero(num_tets_, 6);
   for (const Group& grp : groups_) {

@@ -72,6 +72,17 @@ class Elasticity final : public ForceModule {
   bool has_history() const;
   /// With a history: the dissipated energy of the step (StepRecord::dissipated_energy).
   void report(const Points& x, StepRecord& step) const override;
+  /// Columns of history_state(): 6 (K + 2) for the most Prony terms K of a viscoelastic group
+  /// in time; 0 without one.
+  Index history_columns() const;
+  /// #tets x history_columns() (global tet order): each viscoelastic tet's internal variables
+  /// at the last accepted step, S_iso, E, Q_1 ... Q_K (ViscoelasticHistory::state; a group of
+  /// fewer terms leaves the columns after its own zero), elastic tets zero. What a restarted run
+  /// needs to go on exactly (restore_history).
+  Eigen::MatrixXd history_state() const;
+  /// Goes on from a history_state() of a step accepted at `load` (its time / the duration), as
+  /// if that step had been accepted here. Throws std::logic_error for another shape.
+  void restore_history(const Eigen::MatrixXd& state, double load);
   /// #tets x 6 (global tet order; xx, yy, zz, xy, yz, xz) Cauchy viscous stress of the last
   /// accepted step at its positions x [Pa]; zero in elastic groups.
   SymmetricColumns viscous_stress(const Points& x) const;

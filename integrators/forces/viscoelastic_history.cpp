@@ -5,6 +5,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <functional>
+#include <stdexcept>
 
 #include "integrators/elements/psd_projection.hpp"
 #include "integrators/elements/tet_inputs.hpp"
@@ -156,6 +157,28 @@ double ViscoelasticHistory::accept(const MaterialModel& m, const TetBlock& b, co
   time_ = -1;                // forces set_time to form h
   set_time(accepted_time_);  // a step of length 0 until the next set_time
   return dissipated;
+}
+
+Eigen::MatrixXd ViscoelasticHistory::state() const {
+  if (!timed_) return {};
+  Eigen::MatrixXd out(S_iso_.rows(), 6 * (Q_.size() + 2));
+  out.leftCols<6>() = S_iso_;
+  out.middleCols<6>(6) = E_;
+  for (size_t i = 0; i < Q_.size(); ++i) out.middleCols<6>(6 * Eigen::Index(i + 2)) = Q_[i];
+  return out;
+}
+
+void ViscoelasticHistory::restore(const Eigen::MatrixXd& state, double t) {
+  if (!timed_) return;
+  if (state.rows() != S_iso_.rows() || state.cols() != Eigen::Index(6 * (Q_.size() + 2)))
+    throw std::logic_error("ViscoelasticHistory::restore: a state of another shape");
+  S_iso_ = state.leftCols<6>();
+  E_ = state.middleCols<6>(6);
+  for (size_t i = 0; i < Q_.size(); ++i) Q_[i] = state.middleCols<6>(6 * Eigen::Index(i + 2));
+  started_ = true;
+  accepted_time_ = t;  // as accept() leaves it
+  time_ = -1;
+  set_time(accepted_time_);
 }
 
 SymmetricColumns ViscoelasticHistory::viscous_stress(const TetBlock& b, const Points& x) const {

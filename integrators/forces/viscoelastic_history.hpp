@@ -34,6 +34,8 @@ class ViscoelasticHistory {
   ViscoelasticHistory(PronySeries prony, Index rows, bool timed);
 
   bool timed() const { return timed_; }
+  /// The number of Prony terms K.
+  Index terms() const { return Index(prony_.weights.size()); }
   /// s of the current step: psi + (s - 1) psi_iso is the group's elastic part.
   double isochoric_scale() const { return step_.scale; }
 
@@ -60,6 +62,13 @@ class ViscoelasticHistory {
   /// energy Q : Q / (4 beta_i mu) (mu: the small-strain shear modulus); exact for the linear
   /// model at small strain, where each branch is a spring of modulus beta_i mu and a dashpot.
   double accept(const MaterialModel& m, const TetBlock& b, const Points& x);
+
+  /// The internal variables of the last accepted step per row, what restore() takes back: S_iso,
+  /// E, Q_1 ... Q_K (K = the Prony terms), 6 columns each; empty untimed.
+  Eigen::MatrixXd state() const;
+  /// Goes on from a state() whose step was accepted at time t [s] (a restarted run): exactly as
+  /// if that step had been accepted here. `state` must have #rows x 6 (K + 2) values.
+  void restore(const Eigen::MatrixXd& state, double t);
 
   /// The viscous stress sum_i Q_i of the last accepted step per row as a Cauchy stress at x
   /// (that step's positions): F (sum_i Q_i) F^T / J [Pa].

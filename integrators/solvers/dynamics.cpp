@@ -22,4 +22,11 @@ double step_end_time(const DynamicOptions& options, Index n) {
   return std::min(options.duration, round_to_decimal((n + 1) * options.time_step));
 }
 
+Index first_step_after(const DynamicOptions& options, double time) {
+  const double after = time + 1e-9 * options.time_step;
+  Index n = std::max<Index>(0, static_cast<Index>(std::floor(time / options.time_step)) - 1);
+  while (n < time_step_count(options) && step_end_time(options, n) <= after) ++n;
+  return n;
+}
+
 }  // namespace depthfem

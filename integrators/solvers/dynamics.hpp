@@ -113,4 +113,19 @@ Index time_step_count(const DynamicOptions& options);
 /// exactly the duration for the last.
 double step_end_time(const DynamicOptions& options, Index n);
 
+/// The first step of the time grid that ends after `time` [s] by more than 1e-9 time_step: the
+/// step after the one that ended at `time`, when a run goes on from a completed step.
+Index first_step_after(const DynamicOptions& options, double time);
+
+/// Where a time integrator starts: at rest at time 0 (the default), or from a completed step of
+/// an earlier run (a restart), whose time it continues with, and the acceleration (Newmark,
+/// generalized-alpha) or force (symplectic Euler) the scheme carries.
+struct DynamicStart {
+  double time = 0;      ///< [s]
+  Points acceleration;  ///< #nodes x 3 [m/s^2]; empty: computed from the balance at the start
+  /// Symplectic Euler: the force of the first step, grad E at the start as the step that ended
+  /// there evaluated it (#nodes x 3 [N]); empty: evaluated at the start.
+  Points force;
+};
+
 }  // namespace depthfem

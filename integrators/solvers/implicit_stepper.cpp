@@ -50,7 +50,7 @@ Points ImplicitStepper::initial_acceleration(const Points& x, const Points& v) {
   return as_points(a);
 }
 
-void ImplicitStepper::run(Points& x, Points& v) {
+void ImplicitStepper::run(Points& x, Points& v, const DynamicStart& start) {
   const bool second_order = options_.integrator != Integrator::kImplicitEuler;
   const AlphaParameters p =
       options_.integrator == Integrator::kGeneralizedAlpha
@@ -58,10 +58,10 @@ void ImplicitStepper::run(Points& x, Points& v) {
           : AlphaParameters{0, 0, options_.newmark.beta, options_.newmark.gamma};
   const double beta = p.beta, gamma = p.gamma, af = p.alpha_f, am = p.alpha_m;
   Points a;
-  if (second_order) a = initial_acceleration(x, v);
+  if (second_order) a = start.acceleration.size() ? start.acceleration : initial_acceleration(x, v);
   const Index steps = time_step_count(options_);
-  double t = 0;
-  for (Index n = 0; n < steps; ++n) {
+  double t = start.time;
+  for (Index n = first_step_after(options_, t); n < steps; ++n) {
     const double t_next = step_end_time(options_, n), h = t_next - t;
     // Newton's unknown is x^{n+1-alpha_f} (x^{n+1} itself for implicit Euler and Newmark).
     // With Newmark's predictor x~ = x^n + h v^n + h^2 (1/2 - beta) a^n, a^{n+1} = (x^{n+1} - x~) /
@@ -118,6 +118,7 @@ void ImplicitStepper::run(Points& x, Points& v) {
       const Points a_next = (next - newmark) / (beta * h * h);
       v += h * ((1 - gamma) * a + gamma * a_next);
       a = a_next;
+      lifecycle_.set_acceleration(a);
     } else {
       v = (next - x) / h;
     }

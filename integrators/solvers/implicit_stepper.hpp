@@ -35,9 +35,11 @@ class ImplicitStepper {
   /// options.integrator must be kImplicitEuler or kNewmark (Newmark needs inertia).
   ImplicitStepper(StepLifecycle& lifecycle, ImplicitTerms terms, DynamicOptions options);
 
-  /// Advances (x, v) to the end time, completing every step through the lifecycle. Throws
+  /// Advances (x, v) from `start` to the end time, completing every step through the lifecycle;
+  /// Newmark and generalized-alpha hand it their acceleration after every step
+  /// (StepLifecycle::acceleration), and start from start.acceleration where it is given. Throws
   /// SolveError when a step fails (the steps completed so far stay valid).
-  void run(Points& x, Points& v);
+  void run(Points& x, Points& v, const DynamicStart& start = {});
 
  private:
   /// Newmark's a^0 from M a = -(grad E(x) + C v) on the free directions.

@@ -55,6 +55,12 @@ class StepLifecycle {
   void complete(double load, const NewtonResult& newton, const Points& x, const Points* v,
                 bool settling = false);
 
+  /// Sets the acceleration a scheme carries from step to step (Newmark, generalized-alpha), as
+  /// it stands after the step about to be completed: a run that goes on from that step needs it.
+  void set_acceleration(const Points& a) { acceleration_ = a; }
+  /// The acceleration set last (#nodes x 3 [m/s^2]), empty when the scheme carries none.
+  const Points& acceleration() const { return acceleration_; }
+
   /// Steps completed so far.
   Index completed() const { return completed_; }
   /// Total energy (every module) and its gradient at the state of the last complete(): an
@@ -70,6 +76,7 @@ class StepLifecycle {
   Index completed_ = 0;
   double last_energy_ = 0;
   VectorX last_gradient_;
+  Points acceleration_;
   bool timing_ = false;
   std::chrono::steady_clock::time_point start_;
 };

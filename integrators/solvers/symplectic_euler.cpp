@@ -46,13 +46,17 @@ SymplecticEuler::SymplecticEuler(StepLifecycle& lifecycle, VectorX mass, Dynamic
     throw InputError("symplectic_euler: a consistent mass matrix needs an implicit integrator");
 }
 
-void SymplecticEuler::run(Points& x, Points& v) {
+void SymplecticEuler::run(Points& x, Points& v, const DynamicStart& start) {
   const Constraints& constraints = lifecycle_.constraints();
   const Index steps = time_step_count(options_);
   VectorX g;
-  lifecycle_.begin(x, 0.0);
-  double energy = lifecycle_.gradient(x, g), t = 0;
-  for (Index n = 0; n < steps; ++n) {
+  double t = start.time;
+  lifecycle_.begin(x, t / options_.duration);
+  double energy = lifecycle_.gradient(x, g);
+  // A restart's force: the one the uninterrupted run evaluated when it completed the step (a
+  // viscoelastic history forms it before that step is accepted; after, it agrees to round-off).
+  if (start.force.size() > 0) g = as_dofs(start.force);
+  for (Index n = first_step_after(options_, t); n < steps; ++n) {
     const double t_next = step_end_time(options_, n), h = t_next - t;
     if (!std::isfinite(energy)) {
       throw SolveError("time step " + std::to_string(n) + " (t = " + std::to_string(t) +

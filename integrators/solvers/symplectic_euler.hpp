@@ -26,8 +26,9 @@ class SymplecticEuler {
 
   /// Advances (x, v) to the end time, completing every step through the lifecycle (no Newton
   /// iterations). Forces of step n are those at (x^n, t^n); the gradient computed to report a
-  /// step is the next step's force, so each step evaluates the forces once.
-  void run(Points& x, Points& v);
+  /// step is the next step's force, so each step evaluates the forces once. Starts at
+  /// start.time, with start.force where it is given (its acceleration is not used).
+  void run(Points& x, Points& v, const DynamicStart& start = {});
 
  private:
   StepLifecycle& lifecycle_;

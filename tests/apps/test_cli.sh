@@ -94,4 +94,14 @@ grep -q "^restart from step 1 of .* at load 0.5$" "$tmp/re.log" || fail "restart
   > /dev/null 2> "$tmp/re2.err"
 [ $? -eq 1 ] && [ "$(wc -l < "$tmp/re2.err")" -eq 1 ] || fail "missing step: $(cat "$tmp/re2.err")"
 grep -q "has no step 9" "$tmp/re2.err" || fail "missing step message: $(cat "$tmp/re2.err")"
+
+# A dynamic run goes on from its last step: the viscoelastic bars by Newmark to 0.05 s, then on to
+# 0.1 s (dynamic.duration set longer) in five more steps.
+bars="$src/apps/scenes/falling_bars_viscoelastic.json"
+"$exe" run "$bars" --out "$tmp/dy.h5" --set dynamic.integrator=newmark --set dynamic.duration=0.05 \
+  > /dev/null 2>&1 || fail "dynamic run exited $?"
+"$exe" run "$bars" --out "$tmp/dy2.h5" --restart "$tmp/dy.h5" --set dynamic.integrator=newmark \
+  --set dynamic.duration=0.1 > "$tmp/dy2.log" 2>&1 || fail "dynamic restart exited $?: $(tail -1 "$tmp/dy2.log")"
+grep -q "^restart from step 4 of .* at t = 0.05 s$" "$tmp/dy2.log" || fail "dynamic restart line: $(head -1 "$tmp/dy2.log")"
+"$exe" info "$tmp/dy2.h5" | grep -q "steps: 5, last load/time 0.1," || fail "dynamic restart did not end at 0.1 s in five steps"
 echo "cli: all checks passed"

@@ -1,17 +1,19 @@
 // libFuzzer target for the readers of results files: the input is a results file, read as
 // `depthfem info` reads it (the command line's info command, which reads and prints the summary)
 // and as `depthfem run SCENE --restart FILE` reads it (restart_state: the summary, the mesh
-// checked against the scene's, the last step's load and positions), and step 0's residuals as
-// the tools read a dataset. The scene is a static box of 8 nodes and 6
-// tets; the seeds in corpus/results/ are results files of runs of it, so that a mutated seed
-// passes the mesh check and reaches the steps. `info` may print its summary (exit status 0) or
-// one line "depthfem: error: FILE: ..." (exit status 1); the readers may return or throw an
-// InputError of one line starting with "FILE: ". Anything else (another status, exception or
-// message, a crash, a sanitizer report, a hang) is a finding.
+// checked against the scene's, the last step's load and positions; for the scene's dynamic
+// variant also the velocities and the restart record, read_restart_record), and step 0's
+// residuals as the tools read a dataset. The scene is a static box of 8 nodes and 6 tets; the
+// seeds in corpus/results/ are results files of runs of it and of its dynamic variant, so that a
+// mutated seed passes the mesh check and reaches the steps. `info` may print its summary (exit
+// status 0) or one line "depthfem: error: FILE: ..." (exit status 1); the readers may return or
+// throw an InputError of one line starting with "FILE: ". Anything else (another status, exception
+// or message, a crash, a sanitizer report, a hang) is a finding.
 //
 // DEPTHFEM_FUZZ_WRITE_SEEDS=DIR fuzz_results writes the seeds into DIR and exits: "static_run"
 // (the scene run to the end: steps 0 and 1 at loads 0.5 and 1) and "no_steps" (a file of the
-// scene before its first step, status "failed").
+// scene before its first step, status "failed") and "dynamic_run" (the dynamic variant: two
+// Newmark steps of a viscoelastic cube, with velocities and a restart record).
 #include <hdf5.h>
 #include <unistd.h>
 
@@ -23,6 +25,7 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "apps/command_line.hpp"
 #include "apps/run_scene.hpp"
@@ -49,8 +52,17 @@ fs::path work_folder() {
   return fs::temp_directory_path() / ("depthfem_fuzz_results_" + std::to_string(getpid()));
 }
 
-// The scene, read once.
-std::unique_ptr<depthfem::Scene> scene;
+// The dynamic variant of the scene: viscoelastic (one Prony term), two Newmark steps.
+const std::vector<std::string> kDynamicOverrides = {
+    "analysis=dynamic",
+    R"(bodies.0.material={"model": "neo_hookean", "youngs": 1e5, "poisson": 0.3,
+       "viscoelastic": {"relaxation_times": [0.01], "weights": [0.3]}})",
+    R"(dynamic={"integrator": "newmark", "time_step": 0.01, "duration": 0.02})"};
+// Its restart record: the acceleration, and the history of one Prony term (6 (1 + 2) columns).
+const depthfem::RestartLayout kDynamicLayout{.acceleration = true, .history_columns = 18};
+
+// The scene and its dynamic variant, read once.
+std::unique_ptr<depthfem::Scene> scene, dynamic_scene;
 
 // Aborts with `why` and the message: a finding.
 [[noreturn]] void finding(const char* why, const std::string& message) {
@@ -82,6 +94,11 @@ void write_seeds(const fs::path& folder) {
     file.finish(false, "stopped before its first step");
   }
   fs::copy_file(empty, folder / "no_steps", fs::copy_options::overwrite_existing);
+  const std::string dynamic = (work_folder() / "dynamic_run.h5").string();
+  options.out = dynamic;
+  if (!depthfem::run_scene(*dynamic_scene, options, log).success)
+    finding("the dynamic seed run failed", log.str());
+  fs::copy_file(dynamic, folder / "dynamic_run", fs::copy_options::overwrite_existing);
 }
 
 }  // namespace
@@ -92,6 +109,10 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
   const fs::path scene_path = work_folder() / "cube.json";
   std::ofstream(scene_path, std::ios::binary) << kScene;
   scene = std::make_unique<depthfem::Scene>(depthfem::load_scene(scene_path.string()));
+  std::vector<depthfem::Override> overrides;
+  for (const std::string& o : kDynamicOverrides) overrides.push_back(depthfem::parse_override(o));
+  dynamic_scene =
+      std::make_unique<depthfem::Scene>(depthfem::load_scene(scene_path.string(), overrides));
   if (const char* seeds = std::getenv("DEPTHFEM_FUZZ_WRITE_SEEDS")) {
     write_seeds(seeds);
     std::exit(0);
@@ -119,10 +140,15 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
 
   // `depthfem run SCENE --restart FILE`, and a dataset read by the tools.
-  for (int reader = 0; reader < 2; ++reader) {
+  for (int reader = 0; reader < 3; ++reader) {
     try {
-      if (reader == 0) depthfem::restart_state(file, -1, scene->mesh);
+      if (reader == 0) depthfem::restart_state(file, -1, scene->mesh, depthfem::Analysis::kStatic);
       if (reader == 1) depthfem::read_step_dataset(file, 0, "residuals");
+      if (reader == 2) {
+        const depthfem::StepState state =
+            depthfem::restart_state(file, -1, scene->mesh, depthfem::Analysis::kDynamic);
+        depthfem::read_restart_record(file, state.index, kDynamicLayout);
+      }
     } catch (const depthfem::InputError& e) {
       check_located(e.what(), file);
     }

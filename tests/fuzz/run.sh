@@ -23,8 +23,8 @@ build-sanitize/tests/test_inputs --gtest_brief=1
 bash tests/apps/test_cli.sh build-sanitize/apps/depthfem .
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-# Text inputs up to 4 KiB; results files up to their seeds' size (82 KB, most of it chunks of
-# zeros that HDF5 allocates 4 KiB at a time).
+# Text inputs up to 4 KiB; results files up to their largest seed's size (124 KB, most of it
+# chunks of zeros that HDF5 allocates 4 KiB at a time).
 for target in inputs results command_line; do
   mkdir "$work/$target"
   cp tests/fuzz/corpus/"$target"/* "$work/$target/"
