@@ -47,11 +47,13 @@ ResultFields result_fields(const Scene& scene) {
 }
 
 /// Whether the scene's integrator can go on from a completed step of a results file: every one
-/// but ARKODE's, whose adaptive step size and error history no results file holds.
+/// but SUNDIALS' (ARKODE, CVODE), whose adaptive step size and error history (and CVODE's order
+/// and Nordsieck history) no results file holds.
 bool restartable(const Scene& scene) {
   const Integrator integrator = scene.dynamic_options.integrator;
   return scene.analysis == Analysis::kStatic ||
-         (integrator != Integrator::kArkode && integrator != Integrator::kArkodeDirk);
+         (integrator != Integrator::kArkode && integrator != Integrator::kArkodeDirk &&
+          integrator != Integrator::kCvodeBdf);
 }
 
 /// What the restart record of every step holds: the acceleration Newmark and generalized-alpha
@@ -275,8 +277,8 @@ Start starting_state(const Scene& scene, SceneModel& model, const RunOptions& op
   };
   if (!restartable(scene))
     refuse(
-        "the scene's integrator (arkode or arkode_dirk) keeps an adaptive step size and error "
-        "history that no results file holds; restart with implicit_euler, newmark, "
+        "the scene's integrator (arkode, arkode_dirk or cvode_bdf) keeps an adaptive step size "
+        "and error history that no results file holds; restart with implicit_euler, newmark, "
         "generalized_alpha or symplectic_euler");
   const StepState state =
       restart_state(options.restart, options.restart_step, scene.mesh, scene.analysis);
