@@ -7,19 +7,20 @@
 Runs `build/apps/depthfem run SCENE.json` (with the --set overrides), reads the mesh and the
 scene as run back from its results file, writes a CalculiX deck with the same nodes, the same
 tets as C3D4 elements, the same boundary conditions, gravity and material, runs `ccx` on it and
-compares the last (full-load) state of both: largest displacement, the nodal displacement
-difference (largest and root mean square, relative to depthfem's largest displacement) beside
-the largest error of CalculiX's printed digits (relative to the same), the
-reaction of each boundary condition, wall and CPU time of each process, and the largest |J - 1| of any
-tet. One CSV row per call (appended to --csv, printed without).
+compares the last state of both: largest displacement, the nodal displacement difference
+(largest and root mean square) beside the largest rounding of CalculiX's printed digits (all
+relative to depthfem's largest displacement), the reaction of the condition with the largest
+one, wall and CPU time of each process, and the largest |J - 1| of any tet. One CSV row per call
+(appended to --csv, printed without).
 
-What it can translate (anything else stops with one line): one deformable body, a static
-analysis or a dynamic one by Newmark's average acceleration rule with the lumped mass, from rest
+What it can translate (anything else stops with one line): one deformable body; a static
+analysis, or a dynamic one by Newmark's average acceleration rule with the lumped mass from rest
 (CalculiX's alpha method with alpha = 0, the same rule; depthfem's lumped mass as CalculiX MASS
-elements; the state at the last step is compared), gravity (in a dynamic analysis at full
-strength from t = 0 in both), boundary conditions `fixed` and `displaced` (in a dynamic analysis
-linear in time in both) on `plane`, `box` or `list` node sets, and the material `nearly_incompressible_mooney_rivlin` {C1, C2, kappa} in the standard
-formulation. Its energy is C1 (Ibar1 - 3) + C2 (Ibar2 - 3) + kappa/2 ((J^2 - 1)/2 - ln J).
+elements); gravity (in a dynamic analysis at full strength from t = 0 in both); boundary
+conditions `fixed` and `displaced` (in a dynamic analysis linear in time in both) on `plane`,
+`box` or `list` node sets; the material `nearly_incompressible_mooney_rivlin` {C1, C2, kappa} in
+the standard formulation, whose energy is
+C1 (Ibar1 - 3) + C2 (Ibar2 - 3) + kappa/2 ((J^2 - 1)/2 - ln J).
 With C2 = 0 it is exactly CalculiX's ARRUDA-BOYCE potential with mu = 2 C1, D = 2 / kappa and
 the locking stretch lambda_m -> infinity (the deck takes lambda_m = 1e5, where the series' next
 term changes the stiffness by 6e-11 relative); with C2 != 0 the deck takes CalculiX's
@@ -31,7 +32,6 @@ difference.
 
 import argparse
 import csv
-import json
 import os
 import pathlib
 import resource
@@ -47,10 +47,10 @@ from results import Results, ResultsError  # noqa: E402
 
 DEPTHFEM = "build/apps/depthfem"
 LAMBDA_M = 1e5  # Arruda-Boyce locking stretch: large enough that only its first term remains
-FIELDS = ["label", "material", "nodes", "tets", "time_step", "max_u_depthfem", "max_u_ccx", "max_du_rel",
-          "rms_du_rel", "print_bound_rel", "max_abs_J_minus_1", "reaction_depthfem", "reaction_ccx",
-          "reaction_rel", "seconds_depthfem", "seconds_ccx", "cpu_depthfem", "cpu_ccx",
-          "newton_depthfem", "newton_ccx", "increments_depthfem",
+FIELDS = ["label", "material", "nodes", "tets", "time_step", "max_u_depthfem", "max_u_ccx",
+          "max_du_rel", "rms_du_rel", "print_bound_rel", "max_abs_J_minus_1",
+          "reaction_depthfem", "reaction_ccx", "reaction_rel", "seconds_depthfem", "seconds_ccx",
+          "cpu_depthfem", "cpu_ccx", "newton_depthfem", "newton_ccx", "increments_depthfem",
           "increments_ccx", "threads"]
 
 
@@ -83,7 +83,8 @@ def material_card(material, quadratic_volume):
         raise CompareError("bodies.0.material: only the standard, elastic formulation")
     c1, c2, kappa = material["C1"], material["C2"], material["kappa"]
     if c2 == 0 and not quadratic_volume:
-        return "arruda_boyce", ["*HYPERELASTIC, ARRUDA-BOYCE", f"{2 * c1!r}, {LAMBDA_M!r}, {2 / kappa!r}"]
+        return "arruda_boyce", ["*HYPERELASTIC, ARRUDA-BOYCE",
+                                f"{2 * c1!r}, {LAMBDA_M!r}, {2 / kappa!r}"]
     return "mooney_rivlin", ["*HYPERELASTIC, MOONEY-RIVLIN", f"{c1!r}, {c2!r}, {2 / kappa!r}"]
 
 
@@ -247,6 +248,20 @@ def body_load_on(nodes, scene, X, tets):
     return scene["bodies"][0].get("density", 1000) * g * corner_volumes(X, tets)[nodes].sum()
 
 
+def largest_reaction(conditions, totals_ccx, reactions_depthfem, names, scene, X, tets):
+    """(depthfem's, CalculiX's) reaction of the condition with the largest one: depthfem's row of
+    that condition (the force it exerts on the body); CalculiX's total RF of its node set, which
+    leaves out the body load applied at the set's own nodes, added back."""
+    k = int(np.argmax([np.linalg.norm(t) for t in totals_ccx]))
+    name, _, nodes = conditions[k]
+    return (reactions_depthfem[names.index(name)],
+            totals_ccx[k] - body_load_on(nodes, scene, X, tets))
+
+
+def relative(difference, reference):
+    return np.linalg.norm(difference) / max(np.linalg.norm(reference), 1e-300)
+
+
 def run_timed(command, log, env=None, cwd=None):
     """Runs a program to its end; returns its (wall, CPU: user + system) seconds."""
     start, before = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -279,8 +294,9 @@ def compare(args):
         names = list(r.f["run/constraint_names"].asstr()[:])
         newton = r.series("newton_iterations")
     kind, conditions = write_deck(work / "ccx.inp", scene, X, tets, args.quadratic_volume)
-    env = dict(os.environ, OMP_NUM_THREADS=str(args.threads), CCX_NPROC_STIFFNESS=str(args.threads),
-               CCX_NPROC_RESULTS=str(args.threads), CCX_NPROC_EQUATION_SOLVER=str(args.threads))
+    threads = str(args.threads)
+    env = dict(os.environ, OMP_NUM_THREADS=threads, CCX_NPROC_STIFFNESS=threads,
+               CCX_NPROC_RESULTS=threads, CCX_NPROC_EQUATION_SOLVER=threads)
     seconds_ccx, cpu_ccx = run_timed([ccx, "-i", "ccx"], work / "ccx.log", env=env, cwd=work)
     u_ccx, totals_ccx = read_dat(work / "ccx.dat", len(X), conditions)
     increments, newton_ccx = read_sta(work / "ccx.sta")
@@ -288,13 +304,10 @@ def compare(args):
     u = x - X
     max_u = np.linalg.norm(u, axis=1).max()
     du = np.linalg.norm(u - u_ccx, axis=1)
-    # the reaction with the largest force: depthfem's row of that condition (the force it exerts
-    # on the body), CalculiX's total RF of its node set, which leaves out the body load applied
-    # at the set's own nodes (rho g V / 4 per tet corner, lumped and consistent alike): added
-    k = int(np.argmax([np.linalg.norm(t) for t in totals_ccx])) if conditions else None
-    reaction_d = reactions_depthfem[names.index(conditions[k][0])] if conditions else np.zeros(3)
-    reaction_c = (totals_ccx[k] - body_load_on(conditions[k][2], scene, X, tets)
-                  if conditions else np.zeros(3))
+    reaction_d, reaction_c = (np.zeros(3), np.zeros(3))
+    if conditions:
+        reaction_d, reaction_c = largest_reaction(conditions, totals_ccx, reactions_depthfem,
+                                                  names, scene, X, tets)
     row = {
         "label": args.label, "material": kind, "nodes": len(X), "tets": len(tets),
         "time_step": scene["dynamic"]["time_step"] if "dynamic" in scene else "",
@@ -306,7 +319,7 @@ def compare(args):
         "max_abs_J_minus_1": f"{np.abs(volumes6(x, tets) / volumes6(X, tets) - 1).max():.3e}",
         "reaction_depthfem": f"{np.linalg.norm(reaction_d):.9g}",
         "reaction_ccx": f"{np.linalg.norm(reaction_c):.9g}",
-        "reaction_rel": f"{np.linalg.norm(reaction_d - reaction_c) / max(np.linalg.norm(reaction_d), 1e-300):.3e}",
+        "reaction_rel": f"{relative(reaction_d - reaction_c, reaction_d):.3e}",
         "seconds_depthfem": f"{seconds_depthfem:.3f}", "seconds_ccx": f"{seconds_ccx:.3f}",
         "cpu_depthfem": f"{cpu_depthfem:.3f}", "cpu_ccx": f"{cpu_ccx:.3f}",
         "newton_depthfem": int(newton.sum()), "newton_ccx": newton_ccx,
