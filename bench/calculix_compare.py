@@ -18,8 +18,8 @@ analysis, or a dynamic one by Newmark's average acceleration rule with the lumpe
 (CalculiX's alpha method with alpha = 0, the same rule; depthfem's lumped mass as CalculiX MASS
 elements); gravity (in a dynamic analysis at full strength from t = 0 in both); boundary
 conditions `fixed` and `displaced` (in a dynamic analysis linear in time in both) on `plane`,
-`box` or `list` node sets; the material `nearly_incompressible_mooney_rivlin` {C1, C2, kappa} in
-the standard formulation, whose energy is
+`box` or `list` node sets; the materials below in the standard formulation. The energy of
+`nearly_incompressible_mooney_rivlin` {C1, C2, kappa} is
 C1 (Ibar1 - 3) + C2 (Ibar2 - 3) + kappa/2 ((J^2 - 1)/2 - ln J).
 With C2 = 0 it is exactly CalculiX's ARRUDA-BOYCE potential with mu = 2 C1, D = 2 / kappa and
 the locking stretch lambda_m -> infinity (the deck takes lambda_m = 1e5, where the series' next
@@ -27,7 +27,11 @@ term changes the stiffness by 6e-11 relative); with C2 != 0 the deck takes Calcu
 MOONEY-RIVLIN (C10 = C1, C01 = C2, D1 = 2 / kappa), whose volumetric term (J - 1)^2 / D1 agrees
 with depthfem's to second order in J - 1 and differs by kappa/6 |J - 1|^3 (+ O((J - 1)^4));
 --quadratic-volume takes MOONEY-RIVLIN also for C2 = 0, so that the volumetric term is the only
-difference.
+difference. The paper's compressible `mooney_rivlin` with C2 = 0,
+C1 (I1 - 3) + a (I3 - 1) - (C1 + a) ln I3, is exactly CalculiX's built-in Ciarlet law (a
+material named CIARLET_EL, constants E and nu; its source, src/umat_ciarlet_el.f, takes
+S = lambda/2 (I3 - 1) C^-1 + mu (I - C^-1), the derivative of
+mu/2 (I1 - 3 - ln I3) + lambda/4 (I3 - 1 - ln I3)) with mu = 2 C1 and lambda = 4 a.
 """
 
 import argparse
@@ -74,18 +78,27 @@ def node_set(X, spec, where):
 
 
 def material_card(material, quadratic_volume):
-    """The CalculiX material card lines of a depthfem material (see the module docstring);
-    quadratic_volume: MOONEY-RIVLIN also for C2 = 0 (the volumetric term (J - 1)^2 / D1)."""
-    if material.get("model") != "nearly_incompressible_mooney_rivlin":
-        raise CompareError("bodies.0.material: only nearly_incompressible_mooney_rivlin is "
-                           "translated (its energy is CalculiX's up to the volumetric term)")
+    """(kind, material name, card lines) of a depthfem material in CalculiX (see the module
+    docstring); quadratic_volume: MOONEY-RIVLIN also for C2 = 0."""
+    model = material.get("model")
     if material.get("formulation", "standard") != "standard" or "viscoelastic" in material:
         raise CompareError("bodies.0.material: only the standard, elastic formulation")
+    if model == "mooney_rivlin" and material.get("C2", 0) == 0:
+        if "youngs" in material:
+            E, nu = material["youngs"], material["poisson"]
+        else:  # small-strain moduli mu = 2 C1, lambda = 4 a (materials/mooney_rivlin.hpp)
+            mu, lam = 2 * material["C1"], 4 * material["a"]
+            E, nu = mu * (3 * lam + 2 * mu) / (lam + mu), lam / (2 * (lam + mu))
+        # the material's name selects CalculiX's built-in Ciarlet law; its constants: E, nu
+        return "ciarlet", "CIARLET_EL", ["*USER MATERIAL, CONSTANTS=2", f"{E!r}, {nu!r}"]
+    if model != "nearly_incompressible_mooney_rivlin":
+        raise CompareError("bodies.0.material: only nearly_incompressible_mooney_rivlin and "
+                           "mooney_rivlin with C2 = 0 are translated")
     c1, c2, kappa = material["C1"], material["C2"], material["kappa"]
     if c2 == 0 and not quadratic_volume:
-        return "arruda_boyce", ["*HYPERELASTIC, ARRUDA-BOYCE",
-                                f"{2 * c1!r}, {LAMBDA_M!r}, {2 / kappa!r}"]
-    return "mooney_rivlin", ["*HYPERELASTIC, MOONEY-RIVLIN", f"{c1!r}, {c2!r}, {2 / kappa!r}"]
+        return "arruda_boyce", "M", ["*HYPERELASTIC, ARRUDA-BOYCE",
+                                     f"{2 * c1!r}, {LAMBDA_M!r}, {2 / kappa!r}"]
+    return "mooney_rivlin", "M", ["*HYPERELASTIC, MOONEY-RIVLIN", f"{c1!r}, {c2!r}, {2 / kappa!r}"]
 
 
 def step_procedure(scene):
@@ -130,7 +143,7 @@ def write_deck(path, scene, X, tets, quadratic_volume):
         raise CompareError("bodies: exactly one deformable body is translated")
     if "contact" in scene or "obstacles" in scene:
         raise CompareError("contact, obstacles: not translated")
-    kind, card = material_card(bodies[0]["material"], quadratic_volume)
+    kind, material, card = material_card(bodies[0]["material"], quadratic_volume)
     lines = ["*HEADING", f"depthfem scene {scene.get('name', '')} as C3D4", "*NODE, NSET=NALL"]
     lines += [f"{i + 1}, {x!r}, {y!r}, {z!r}" for i, (x, y, z) in enumerate(X)]
     lines.append("*ELEMENT, TYPE=C3D4, ELSET=EALL")
@@ -172,8 +185,8 @@ def write_deck(path, scene, X, tets, quadratic_volume):
         rho = 1e-30  # the tets' own mass (and weight) vanish beside the nodes'
     if procedure[0].startswith("*DYNAMIC"):
         lines += ["*AMPLITUDE, NAME=RAMP", f"0, 0, {scene['dynamic']['duration']!r}, 1"]
-    lines += ["*MATERIAL, NAME=M", *card, "*DENSITY", f"{rho!r}",
-              "*SOLID SECTION, ELSET=EALL, MATERIAL=M",
+    lines += [f"*MATERIAL, NAME={material}", *card, "*DENSITY", f"{rho!r}",
+              f"*SOLID SECTION, ELSET=EALL, MATERIAL={material}",
               "*STEP, NLGEOM, INC=100000", *procedure,
               # residual 1e-9 of the mean force, correction 1e-9 of the largest change
               "*CONTROLS, PARAMETERS=FIELD", "1e-9, 1e-9", "*BOUNDARY", *boundary]
@@ -357,7 +370,7 @@ def plot(csv_path, png_path):
     ]
     for ax, keep, xlabel, x, joined, title in panels:
         sel = [r for r in rows if keep(r)]
-        for label, marker in zip(dict.fromkeys(r["label"] for r in sel), "osD^v"):
+        for label, marker in zip(dict.fromkeys(r["label"] for r in sel), "osD^v<>ph"):
             group = sorted((r for r in sel if r["label"] == label), key=x)
             ax.loglog([x(r) for r in group], [float(r["max_du_rel"]) for r in group],
                       marker + ("-" if joined else ""), mfc="none", ms=8, label=label)

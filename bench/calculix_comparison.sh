@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # depthfem against CalculiX (ccx, Debian's calculix-ccx) on the same linear tets (C3D4): the
 # cantilever of apps/scenes/cantilever_gravity.json made soft enough to sag 8 to 23 % of its
-# length (shear modulus 2 MPa, kappa = 10 mu) at four meshes, the same bar bent by a prescribed
-# tip displacement, and both in Newmark dynamics; each case by bench/calculix_compare.py (one
-# process per code, one thread each). One CSV row per case (bench/results/calculix.md reads
-# them), then the figure.
+# length (shear modulus 2 MPa, bulk modulus about 10 mu) at four meshes, the same bar bent by a
+# prescribed tip displacement, and both in Newmark dynamics; each case by
+# bench/calculix_compare.py (one process per code, one thread each). One CSV row per case
+# (bench/results/calculix.md reads them), then the figure.
 #   bench/calculix_comparison.sh [OUT_DIR]   (from the repository root after building depthfem;
 #   OUT_DIR defaults to bench/results; MESHES="[20,2,2] [40,4,4] [80,8,8]" and
 #   FINE="[160,16,16]" by default)
@@ -13,10 +13,13 @@
 #                     ARRUDA-BOYCE with lambda_m -> infinity; MESHES, then FINE
 #   sag_mooney_rivlin C1 = 0.7 MPa, C2 = 0.3 MPa, kappa = 20 MPa against CalculiX's MOONEY-RIVLIN
 #                     (volumetric term (J-1)^2 / D1: differs from depthfem's at third order); MESHES
+#   sag_paper_mooney_rivlin  the paper's compressible mooney_rivlin, C1 = 1 MPa, C2 = 0,
+#                     a = 4.5 MPa (nu = 0.45): exactly CalculiX's built-in Ciarlet law; MESHES
 #   sag_neo_hookean_quadratic_volume  the first against CalculiX's MOONEY-RIVLIN with C01 = 0:
 #                     only the volumetric terms differ; MESHES
-#   kappa_mooney_rivlin  the same at [40,4,4] with kappa = 10, 100, 1000 mu
-#   tip_neo_hookean, tip_mooney_rivlin  no gravity, the end x = 1 moved by 0.3 m down, [40,4,4]
+#   kappa_mooney_rivlin  sag_mooney_rivlin at [40,4,4] with kappa = 10, 100, 1000 mu
+#   tip_neo_hookean, tip_mooney_rivlin, tip_paper_mooney_rivlin  no gravity, the end x = 1
+#                     moved by 0.3 m down, [40,4,4]
 #   dyn_tip_neo_hookean  dynamic (Newmark, lumped mass), no gravity, the end moved down 0.3 m
 #                     linearly over 0.4 s, from rest, [20,2,2], time steps 0.01 and 0.005 s
 #   dyn_sag_neo_hookean  dynamic, gravity at full strength from t = 0, 0.4 s, [20,2,2], time
@@ -35,9 +38,9 @@ csv=$out/calculix.csv
 rm -f "$csv"
 scene=apps/scenes/cantilever_gravity.json
 neo='bodies.0.material={"model":"nearly_incompressible_mooney_rivlin","C1":1e6,"C2":0,"kappa":2e7}'
-mr() {
-  echo "bodies.0.material={\"model\":\"nearly_incompressible_mooney_rivlin\",\"C1\":7e5,\"C2\":3e5,\"kappa\":$1}"
-}
+paper='bodies.0.material={"model":"mooney_rivlin","C1":1e6,"C2":0,"a":4.5e6}'
+nim='bodies.0.material={"model":"nearly_incompressible_mooney_rivlin"'
+mr() { echo "$nim,\"C1\":7e5,\"C2\":3e5,\"kappa\":$1}"; }  # kappa = $1
 tip='boundary=[{"name":"clamp","type":"fixed","nodes":{"plane":{"normal":[1,0,0],"offset":0}}},
   {"name":"tip","type":"displaced","displacement":[0,0,-0.3],
    "nodes":{"plane":{"normal":[1,0,0],"offset":1}}}]'
@@ -46,6 +49,7 @@ compare() { /usr/bin/python3 bench/calculix_compare.py "$scene" "$tmp/run" --csv
 for cells in $meshes; do
   compare --label sag_neo_hookean --set "$neo" --set "bodies.0.mesh.cells=$cells"
   compare --label sag_mooney_rivlin --set "$(mr 2e7)" --set "bodies.0.mesh.cells=$cells"
+  compare --label sag_paper_mooney_rivlin --set "$paper" --set "bodies.0.mesh.cells=$cells"
   compare --label sag_neo_hookean_quadratic_volume --set "$neo" --set "bodies.0.mesh.cells=$cells" \
     --quadratic-volume
 done
@@ -58,6 +62,8 @@ done
 compare --label tip_neo_hookean --set "$neo" --set "gravity=[0,0,0]" --set "$tip" \
   --set "bodies.0.mesh.cells=[40,4,4]"
 compare --label tip_mooney_rivlin --set "$(mr 2e7)" --set "gravity=[0,0,0]" --set "$tip" \
+  --set "bodies.0.mesh.cells=[40,4,4]"
+compare --label tip_paper_mooney_rivlin --set "$paper" --set "gravity=[0,0,0]" --set "$tip" \
   --set "bodies.0.mesh.cells=[40,4,4]"
 dynamic() { echo "dynamic={\"integrator\":\"newmark\",\"time_step\":$1,\"duration\":0.4}"; }
 for h in 0.01 0.005; do
