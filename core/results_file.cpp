@@ -338,7 +338,7 @@ struct ResultsFile::State {
   TriIndices tris;
   RunInfo info;
   bool depth = false;  ///< the run has material-depth contact (and reports penetration)
-  std::vector<XdmfSidecar> sidecars;
+  std::vector<XdmfSidecar> sidecars = {};
   Index num_steps = 0;
   Index last_index = -1;
   Index settling_steps = 0;

@@ -72,9 +72,8 @@ Trajectory simulate(const Problem& p, const DynamicOptions& o) {
     system.add(std::move(spring));
   }
   if (!p.g.isZero()) system.add(std::make_unique<Gravity>(VectorX::Constant(1, p.m), p.g, false));
-  const bool implicit = o.integrator == Integrator::kImplicitEuler ||
-                        o.integrator == Integrator::kNewmark ||
-                        o.integrator == Integrator::kCvodeBdf;
+  const bool implicit =
+      o.integrator != Integrator::kSymplecticEuler && o.integrator != Integrator::kArkode;
   NodalSpring* inertia =
       implicit ? &system.add(std::make_unique<NodalSpring>("inertia", VectorX::Constant(1, p.m)))
                : nullptr;
@@ -95,6 +94,7 @@ Trajectory simulate(const Problem& p, const DynamicOptions& o) {
   switch (o.integrator) {
     case Integrator::kImplicitEuler:
     case Integrator::kNewmark:
+    case Integrator::kGeneralizedAlpha:
       ImplicitStepper(lifecycle, {inertia, {}}, o).run(x, v);
       break;
     case Integrator::kSymplecticEuler:
@@ -102,6 +102,7 @@ Trajectory simulate(const Problem& p, const DynamicOptions& o) {
       SymplecticEuler(lifecycle, m, o, p.k > 0 ? 2 / p.omega() : kInf).run(x, v);
       break;
     case Integrator::kArkode:
+    case Integrator::kArkodeDirk:
     case Integrator::kCvodeBdf: {
       SundialsStepper stepper(lifecycle, m, o, {inertia, {}});
       stepper.run(x, v);
@@ -172,11 +173,31 @@ TEST(ImplicitStepper, NewmarkFreeFallIsExact) {
   expect_exact_free_fall(Integrator::kNewmark, 1e-11, 1e-12 / 0.05);
 }
 
+// Generalized-alpha, a Newmark scheme on weighted mid-step forces, starts from the acceleration
+// the forces give (here g): a constant acceleration is integrated exactly, up to the same
+// round-off as Newmark's.
+TEST(ImplicitStepper, GeneralizedAlphaFreeFallIsExact) {
+  for (const double rho : {0.0, 0.5, 1.0}) {
+    SCOPED_TRACE(rho);
+    const Problem p = free_fall();
+    DynamicOptions o = options_for(Integrator::kGeneralizedAlpha, 0.05, 1.0);
+    o.generalized_alpha.rho_inf = rho;
+    const Trajectory run = simulate(p, o);
+    ASSERT_EQ(run.steps.size(), 20u);
+    for (size_t i = 0; i < run.x.size(); ++i) {
+      const double t = run.steps[i].load;
+      EXPECT_LE((run.x[i] - (p.x0 + t * p.v0 + 0.5 * t * t * p.g)).norm(), 1e-11) << "t = " << t;
+      EXPECT_LE((run.v[i] - (p.v0 + t * p.g)).norm(), 1e-12 / 0.05) << "t = " << t;
+    }
+  }
+}
+
 TEST(SundialsStepper, FreeFallWithinItsTolerance) {
   // No truncation error, so well within one step's error allowance rtol |y| + atol
-  // (1e-8 x 10 m + 1e-12 m).
+  // (1e-8 x 10 m + 1e-12 m), for the explicit and the diagonally implicit methods.
   const double allowance = 1e-8 * 10 + 1e-12;
   expect_exact_free_fall(Integrator::kArkode, allowance, allowance);
+  expect_exact_free_fall(Integrator::kArkodeDirk, allowance, allowance);
 }
 
 // CVODE's BDF integrates a constant acceleration exactly from order 2 on, but it starts at order
@@ -341,13 +362,14 @@ TEST(SymplecticEuler, OscillatorHasItsDiscreteFrequencyAndModifiedEnergy) {
 TEST(SundialsStepper, OscillatorWithinItsTolerance) {
   const Problem p = oscillator();
   const double w = p.omega(), x0 = p.x0.x(), y0 = p.v0.x() / w, amplitude = std::hypot(x0, y0);
-  for (Integrator scheme : {Integrator::kArkode, Integrator::kCvodeBdf}) {
-    SCOPED_TRACE(scheme == Integrator::kArkode ? "arkode" : "cvode_bdf");
+  for (Integrator scheme : {Integrator::kArkode, Integrator::kArkodeDirk, Integrator::kCvodeBdf}) {
+    SCOPED_TRACE(static_cast<int>(scheme));
     double error[2];
     for (int tight = 0; tight < 2; ++tight) {
       DynamicOptions o = options_for(scheme, 0.1, 2.0);
-      ErrorControl& control = scheme == Integrator::kArkode ? static_cast<ErrorControl&>(o.arkode)
-                                                            : static_cast<ErrorControl&>(o.cvode);
+      ErrorControl& control = scheme == Integrator::kCvodeBdf
+                                  ? static_cast<ErrorControl&>(o.cvode)
+                                  : static_cast<ErrorControl&>(o.arkode);
       control.relative_tolerance = tight ? 1e-10 : 1e-6;
       // BDF: each step's Newton solve stops at a force residual of its own test (quadratic
       // potential: one step is exact up to round-off).
