@@ -1,5 +1,5 @@
 // Newton with line search on energies whose minimiser is known in closed form, and the line
-// search starting below the modules' max_step.
+// search starting below the modules' max_step or, as the paper's, at the full step.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -120,6 +120,28 @@ TEST(Newton, LineSearchStartsBelowTheModulesMaxStep) {
   }
   EXPECT_EQ(illegal[0], 0) << "with max_step no trial point crosses the wall";
   EXPECT_GT(illegal[1], 0) << "without it the full Newton step does (the test would notice)";
+}
+
+// The paper's line search (full_step_first): the full Newton step is tried even where the
+// module knows it crosses the wall, and halved through the illegal trials to the same minimiser.
+TEST(Newton, FullStepFirstHalvesThroughIllegalTrials) {
+  const double b = 1 + Wall::s_t, c = Wall::s_t - Wall::mu / Wall::k;
+  const double exact = 0.5 * (b - std::sqrt(b * b - 4 * c));
+  PhaseTimers timers;
+  System system(1, timers);
+  Wall& wall = system.add(std::make_unique<Wall>(true));
+  const Constraints fixed_yz(Points::Zero(1, 3), {{"yz", {0}, OnLine{Vec3::UnitX()}}});
+  NewtonOptions options;
+  options.tolerance = 1e-12;
+  options.line_search = LineSearchRule::kResidual;
+  options.full_step_first = true;
+  options.gradient_fallback = false;
+  NewtonSolver newton(system, fixed_yz, options);
+  Points x = Points::Zero(1, 3);
+  const NewtonResult r = newton.solve(x);
+  ASSERT_TRUE(r.converged) << r.failure;
+  EXPECT_NEAR(x(0, 0), exact, 1e-12);
+  EXPECT_GT(wall.illegal, 0) << "the full step from x = 0 crosses the wall at s = 1";
 }
 
 }  // namespace
