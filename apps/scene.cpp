@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -13,6 +14,7 @@
 #include <sstream>
 #include <string_view>
 #include <type_traits>
+#include <utility>
 #include <variant>
 
 #include "apps/json_reader.hpp"
@@ -419,13 +421,40 @@ ConstraintSpec read_constraint(JsonObject c, size_t index) {
   return {out, nodes};
 }
 
-void read_contact(JsonObject c, Scene& scene) {
+// "exclude": interface names as the results file's /run/contact_names gives them.
+std::vector<std::array<Index, 2>> read_excluded(JsonObject& c,
+                                                const std::vector<std::string>& bodies,
+                                                bool self_contact) {
+  std::vector<std::pair<std::string, std::array<Index, 2>>> known;
+  std::string list;
+  for (Index a = 0; a < static_cast<Index>(bodies.size()); ++a)
+    for (Index b = a; b < static_cast<Index>(bodies.size()); ++b)
+      if (a != b || self_contact) {
+        known.push_back({interface_name(bodies[a], bodies[b]), {a, b}});
+        list += (list.empty() ? "" : ", ") + known.back().first;
+      }
+  std::vector<std::array<Index, 2>> excluded;
+  for (const std::string& name : c.strings("exclude")) {
+    const auto it = std::ranges::find(known, name, [](const auto& k) { return k.first; });
+    if (it == known.end())
+      c.fail("exclude", "unknown interface '" + name + "' (the scene's: " + list + ")");
+    excluded.push_back(it->second);
+  }
+  return excluded;
+}
+
+void read_contact(JsonObject c, Scene& scene, const std::vector<std::string>& bodies) {
   scene.contact = c.choice<ContactModel>("model", "contact model",
                                          {{"material_depth", ContactModel::kMaterialDepth},
                                           {"node_to_surface", ContactModel::kNodeToSurface}});
   scene.contact_options.penalty = c.number("penalty");
   scene.contact_options.self_contact = c.boolean("self_contact", true);
   if (!(scene.contact_options.penalty > 0)) c.fail("penalty", "must be > 0");
+  if (c.has("exclude")) {
+    if (scene.contact != ContactModel::kMaterialDepth)
+      c.fail("exclude", "only for the material_depth model");
+    scene.contact_options.excluded = read_excluded(c, bodies, scene.contact_options.self_contact);
+  }
   c.finish();
 }
 
@@ -814,13 +843,18 @@ std::vector<BodySpec> read_bodies(JsonObject& r, const std::string& dir, Scene& 
 
 // The sections after the bodies: boundary (returned, its node selections resolved once the
 // meshes exist), contact, obstacles, solver, output, dynamic.
-std::vector<ConstraintSpec> read_sections(JsonObject& r, Scene& scene) {
+std::vector<ConstraintSpec> read_sections(JsonObject& r, Scene& scene,
+                                          const std::vector<BodySpec>& bodies) {
   std::vector<ConstraintSpec> boundary;
   if (r.has("boundary")) {
     std::vector<JsonObject> list = r.objects("boundary");
     for (size_t k = 0; k < list.size(); ++k) boundary.push_back(read_constraint(list[k], k));
   }
-  if (r.has("contact")) read_contact(r.object("contact"), scene);
+  if (r.has("contact")) {
+    std::vector<std::string> names;
+    for (const BodySpec& b : bodies) names.push_back(b.name);
+    read_contact(r.object("contact"), scene, names);
+  }
   if (r.has("obstacles")) {
     std::vector<JsonObject> list = r.objects("obstacles");
     for (size_t k = 0; k < list.size(); ++k) scene.obstacles.push_back(read_obstacle(list[k], k));
@@ -959,7 +993,7 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
   scene.gravity = r.vec3("gravity", Vec3::Zero());
   const std::vector<BodySpec> bodies =
       read_bodies(r, std::filesystem::path(path).parent_path().string(), scene);
-  std::vector<ConstraintSpec> boundary = read_sections(r, scene);
+  std::vector<ConstraintSpec> boundary = read_sections(r, scene, bodies);
   r.finish();
 
   // Then the meshes, and what depends on them.

@@ -5,7 +5,7 @@
 
 namespace depthfem {
 
-AabbTree::AabbTree(const std::vector<Box3>& boxes, int leaf_size) : boxes_(boxes) {
+AabbTree::AabbTree(std::span<const Box3> boxes, int leaf_size) : boxes_(boxes.size()) {
   const Index n = static_cast<Index>(boxes.size());
   order_.resize(static_cast<size_t>(n));
   for (Index i = 0; i < n; ++i) order_[i] = i;
@@ -43,15 +43,15 @@ void AabbTree::build(Index node, Index begin, Index end, int leaf_size,
   build(left + 1, mid, end, leaf_size, centers);
 }
 
-void AabbTree::refit(const std::vector<Box3>& boxes) {
+void AabbTree::refit(std::span<const Box3> boxes) {
   if (boxes.size() != boxes_.size())
     throw std::logic_error("AabbTree::refit: primitive count changed");
-  boxes_ = boxes;
+  for (size_t k = 0; k < boxes_.size(); ++k) boxes_[k] = boxes[static_cast<size_t>(order_[k])];
   for (Index i = num_nodes() - 1; i >= 0; --i) {
     Node& n = nodes_[i];
     n.box.setEmpty();
     if (n.count > 0) {
-      for (Index k = n.first; k < n.first + n.count; ++k) n.box.extend(boxes_[order_[k]]);
+      for (Index k = n.first; k < n.first + n.count; ++k) n.box.extend(boxes_[k]);
     } else {
       n.box.extend(nodes_[n.first].box);
       n.box.extend(nodes_[n.first + 1].box);

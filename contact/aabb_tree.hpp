@@ -3,6 +3,7 @@
 /// splitting along the greatest extent, refit bottom up when the primitives move.
 
 #include <Eigen/Geometry>
+#include <span>
 #include <vector>
 
 #include "core/types.hpp"
@@ -12,15 +13,16 @@ namespace depthfem {
 using Box3 = Eigen::AlignedBox3d;
 
 /// A binary tree over primitive boxes. Nodes are stored parents before children, so a reverse
-/// sweep refits every node after its children.
+/// sweep refits every node after its children; the primitive boxes are kept in leaf order, so a
+/// leaf's boxes lie side by side in memory.
 class AabbTree {
  public:
   AabbTree() = default;
   /// Builds over `boxes` (one per primitive; primitive ids are their positions).
-  explicit AabbTree(const std::vector<Box3>& boxes, int leaf_size = 4);
+  explicit AabbTree(std::span<const Box3> boxes, int leaf_size = 4);
 
   /// Recomputes every node box from new primitive boxes (same count and order).
-  void refit(const std::vector<Box3>& boxes);
+  void refit(std::span<const Box3> boxes);
 
   /// Calls visit(primitive) for every primitive whose box intersects `query`.
   template <class Visit>
@@ -66,7 +68,7 @@ class AabbTree {
       if (pruned(n.box)) continue;
       if (n.count > 0) {
         for (Index k = n.first; k < n.first + n.count; ++k)
-          if (!pruned(boxes_[order_[k]])) visit(order_[k]);
+          if (!pruned(boxes_[k])) visit(order_[k]);
       } else {
         const bool left = left_first(nodes_[n.first].box, nodes_[n.first + 1].box);
         stack[top++] = left ? n.first + 1 : n.first;  // the last pushed is visited first
@@ -76,8 +78,8 @@ class AabbTree {
   }
 
   std::vector<Node> nodes_;
-  std::vector<Index> order_;
-  std::vector<Box3> boxes_;
+  std::vector<Index> order_;  ///< primitive in each leaf slot
+  std::vector<Box3> boxes_;   ///< box of each leaf slot's primitive
 };
 
 /// Box of each tet of `tets` at positions x, grown by `margin` [m].

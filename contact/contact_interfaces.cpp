@@ -4,6 +4,10 @@
 
 namespace depthfem {
 
+std::string interface_name(const std::string& a, const std::string& b) {
+  return a == b ? a + " (self)" : a + "/" + b;
+}
+
 ContactInterfaces::ContactInterfaces(const std::vector<Body>& bodies, bool self_contact)
     : num_bodies_(static_cast<Index>(bodies.size())) {
   row_.assign(static_cast<size_t>(num_bodies_) * static_cast<size_t>(num_bodies_), -1);
@@ -12,7 +16,7 @@ ContactInterfaces::ContactInterfaces(const std::vector<Body>& bodies, bool self_
       if (a == b && !self_contact) continue;
       const Index row = static_cast<Index>(names_.size());
       row_[a * num_bodies_ + b] = row_[b * num_bodies_ + a] = row;
-      names_.push_back(a == b ? bodies[a].name + " (self)" : bodies[a].name + "/" + bodies[b].name);
+      names_.push_back(interface_name(bodies[a].name, bodies[b].name));
     }
   }
 }

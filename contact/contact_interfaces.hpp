@@ -11,6 +11,9 @@
 
 namespace depthfem {
 
+/// The name of the interface between bodies named a and b: "a/b", or "a (self)" where a is b.
+std::string interface_name(const std::string& a, const std::string& b);
+
 /// Maps (body a, body b) to a report row. Rows are "a/b" for every a before b in the scene and,
 /// with self-contact, "a (self)".
 ///

@@ -56,12 +56,14 @@ void MaterialDepthContact::build_trees(const Points& x) {
   const std::vector<Box3> boxes = tet_boxes(x, tets_);
   trees_.clear();
   for (const Body& b : bodies_)
-    trees_.emplace_back(
-        std::vector<Box3>(boxes.begin() + b.first_tet, boxes.begin() + b.first_tet + b.num_tets));
+    trees_.emplace_back(std::span(boxes).subspan(static_cast<size_t>(b.first_tet),
+                                                 static_cast<size_t>(b.num_tets)));
 }
 
 bool MaterialDepthContact::searched(Index a, Index b) const {
   if (bodies_[a].rigid && bodies_[b].rigid) return false;
+  const std::array<Index, 2> pair = {std::min(a, b), std::max(a, b)};
+  if (std::ranges::find(options_.excluded, pair) != options_.excluded.end()) return false;
   return a != b || options_.self_contact;
 }
 
@@ -77,8 +79,8 @@ void MaterialDepthContact::begin_step(const Points& x) {
 void MaterialDepthContact::prepare(const Points& x) {
   const std::vector<Box3> boxes = tet_boxes(x, tets_);
   for (size_t b = 0; b < bodies_.size(); ++b)
-    trees_[b].refit(std::vector<Box3>(boxes.begin() + bodies_[b].first_tet,
-                                      boxes.begin() + bodies_[b].first_tet + bodies_[b].num_tets));
+    trees_[b].refit(std::span(boxes).subspan(static_cast<size_t>(bodies_[b].first_tet),
+                                             static_cast<size_t>(bodies_[b].num_tets)));
   const Index n = static_cast<Index>(tris_.rows());
   const Index chunks = (n + kChunk - 1) / kChunk;
   std::vector<std::vector<ContactPair>> found(static_cast<size_t>(chunks));

@@ -3,8 +3,9 @@
 /// triangle against every tet of another body (and of its own body, for self-contact), the
 /// penalty eps/2 g^2 integrated exactly over their intersection polygon. Pairs of two rigid
 /// bodies (a body against itself included) are not searched: all their nodes are prescribed, so
-/// they exert no force on an unknown.
+/// they exert no force on an unknown. Nor are the interfaces a scene excludes (ContactOptions).
 
+#include <array>
 #include <vector>
 
 #include "contact/aabb_tree.hpp"
@@ -20,6 +21,10 @@ namespace depthfem {
 struct ContactOptions {
   double penalty = 1e6;      ///< eps [Pa/m]: contact pressure per metre of material depth
   bool self_contact = true;  ///< triangles against the tets of their own body
+  /// Pairs of bodies (a <= b; a == b: self-contact) not searched: interfaces that boundary
+  /// conditions hold together, such as a tissue attached to a bone, whose coinciding surfaces
+  /// only touch. Their report rows stay, at zero.
+  std::vector<std::array<Index, 2>> excluded = {};
 };
 
 /// A boundary triangle cutting a tet, with the polygon they share.

@@ -341,7 +341,9 @@ def cases(exe):
                        ("nothing held under gravity", lambda s: s.update(
                            boundary=[], gravity=[0, 0, -9.81])),
                        ("negative penalty", setter(["contact"], {"model": "material_depth",
-                                                                 "penalty": -1}))]:
+                                                                 "penalty": -1})),
+                       ("unknown excluded interface", setter(["contact"], {
+                           "model": "material_depth", "penalty": 1e6, "exclude": ["bar/floor"]}))]:
         add("boundary and contact", name, {"scene.json": scene(edit)})
 
     # Mesh files: Gmsh.

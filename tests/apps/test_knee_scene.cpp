@@ -58,6 +58,7 @@ TEST(KneeScene, FineVariantDiffersInItsMeshAndNewtonCap) {
   for (size_t k = 0; k < fine.constraints.size(); ++k)
     EXPECT_EQ(fine.constraints[k].name, coarse.constraints[k].name);
   EXPECT_EQ(fine.contact_options.penalty, coarse.contact_options.penalty);
+  EXPECT_EQ(fine.contact_options.excluded, coarse.contact_options.excluded);
   EXPECT_EQ(fine.groups.size(), coarse.groups.size());
   const StaticOptions &c = coarse.static_options, &f = fine.static_options;
   EXPECT_EQ(f.initial_increment, c.initial_increment);
@@ -109,6 +110,7 @@ TEST(KneeScene, PaperVariantIsTheKneeUnderThePaperPreset) {
   for (size_t k = 0; k < paper.constraints.size(); ++k)
     EXPECT_EQ(paper.constraints[k].name, knee.constraints[k].name);
   EXPECT_EQ(paper.contact_options.penalty, knee.contact_options.penalty);
+  EXPECT_EQ(paper.contact_options.excluded, knee.contact_options.excluded);
   const StaticOptions &p = paper.static_options, &k = knee.static_options;
   EXPECT_EQ(p.initial_increment, k.initial_increment);
   EXPECT_EQ(p.max_increment, k.max_increment);
@@ -170,6 +172,45 @@ TEST(KneeScene, FirstStepsConvergeWithoutInversionOrDeepPenetration) {
     ASSERT_TRUE(r.steps[k].penetration.has_value());
     EXPECT_LT(*r.steps[k].penetration, 1e-3) << "step " << k;
   }
+}
+
+// The soft tissue is attached to the tibia, whose surface it covers: the scene excludes the
+// tibia/leg interface from the search. Searched, its coinciding surfaces form pairs over the
+// whole attachment that only touch (zero depth on the tissue's boundary): they carry no force
+// and excluding them leaves the positions as they are.
+TEST(KneeScene, TheAttachedTibiaOnlyTouchesTheTissue) {
+  const std::vector<std::string> step = {"boundary.0.angle_deg=0.5", "boundary.1.angle_deg=0.5",
+                                         "solver.initial_increment=1", "solver.max_increment=1"};
+  const Scene excluded = load("knee_flexion", step);
+  ASSERT_EQ(excluded.contact_options.excluded, (std::vector<std::array<Index, 2>>{{1, 2}}));
+  std::vector<std::string> searched_step = step;
+  // Excluding two rigid bodies, never searched anyway, searches every other interface.
+  searched_step.push_back("contact.exclude=[\"femur/tibia\"]");
+  const Scene searched = load("knee_flexion", searched_step);
+  const auto last_positions = [](const Scene& s, StepRecord& last) {
+    Points x;
+    RunOptions options;
+    options.observer = [&](const StepRecord& record, const Points& now) {
+      last = record;
+      x = now;
+    };
+    std::ostringstream log;
+    const RunResult r = run_scene(s, options, log);
+    EXPECT_TRUE(r.success) << r.message << "\n" << log.str();
+    return x;
+  };
+  StepRecord a, b;
+  const Points xa = last_positions(excluded, a), xb = last_positions(searched, b);
+  const auto row = [](const StepRecord& r, const std::string& name) {
+    for (const InterfaceForce& f : r.contact)
+      if (f.name == name) return f;
+    ADD_FAILURE() << "no row " << name;
+    return InterfaceForce{};
+  };
+  EXPECT_GT(row(b, "tibia/leg").area, 0.01) << "the attachment's pairs [m^2]";
+  EXPECT_LT(row(b, "tibia/leg").magnitude, 1e-6) << "[N]";
+  EXPECT_EQ(row(a, "tibia/leg").area, 0.0);
+  EXPECT_LT((xa - xb).cwiseAbs().maxCoeff(), 1e-8) << "[m]";
 }
 
 }  // namespace

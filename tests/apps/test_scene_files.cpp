@@ -285,6 +285,33 @@ TEST_F(SceneFileTest, HessianProjectionIsASolverSwitch) {
             std::string::npos);
 }
 
+// contact.exclude names interfaces as the results file does and resolves them to body pairs;
+// an unknown name lists the scene's interfaces, and the other contact model refuses the key.
+TEST_F(SceneFileTest, ContactExcludeNamesInterfaces) {
+  const std::string two =
+      replaced(kValid, "\"boundary\"",
+               R"("contact": {"model": "material_depth", "penalty": 1e6}, "boundary")");
+  const std::string scene = replaced(
+      two, "}}],",
+      R"(}}, {"name": "c", "rigid": true, "mesh": {"generator": "box", "lo": [0,0,1], "hi": [1,1,2], "cells": [1,1,1]}}],)");
+  const auto with = [](const std::string& value) {
+    return std::vector<Override>{parse_override("contact.exclude=" + value)};
+  };
+  EXPECT_TRUE(load_scene(write(scene)).contact_options.excluded.empty());
+  const Scene s = load_scene(write(scene), with(R"x(["b/c", "b (self)"])x"));
+  EXPECT_EQ(s.contact_options.excluded, (std::vector<std::array<Index, 2>>{{0, 1}, {0, 0}}));
+  EXPECT_NE(error(scene, with(R"(["c/b"])"))
+                .find("contact.exclude: unknown interface 'c/b' (the scene's: b (self), b/c, "
+                      "c (self))"),
+            std::string::npos);
+  EXPECT_NE(error(scene, with(R"("b/c")")).find("contact.exclude: expected a non-empty array"),
+            std::string::npos);
+  EXPECT_NE(error(scene, {parse_override(R"(contact.model="node_to_surface")"),
+                          parse_override(R"(contact.exclude=["b/c"])")})
+                .find("contact.exclude: only for the material_depth model"),
+            std::string::npos);
+}
+
 // Every integer is read in 64 bits and refused, with its key, when it does not fit.
 TEST_F(SceneFileTest, IntegersAboveTwoToThe31AreRefusedNotTruncated) {
   EXPECT_NE(error(replaced(kValid, "\"cells\": [1,1,1]", "\"cells\": [4294967336,1,1]"))

@@ -125,24 +125,32 @@ TEST(MaterialDepthContact, AssembledDerivativesMatchFiniteDifferences) {
   EXPECT_LE((Hv - Hv_fd).cwiseAbs().maxCoeff(), 1e-5 * Hv.cwiseAbs().maxCoeff());
 }
 
-// Pairs of two rigid bodies, whose nodes are all prescribed, are not searched; every other pair
-// is found as without rigid bodies: three overlapping boxes, the outer two rigid.
-TEST(MaterialDepthContact, PairsOfTwoRigidBodiesAreNotSearched) {
+// The (triangle, tet) pairs a module finds at the reference configuration.
+std::set<std::pair<Index, Index>> found_pairs(const Mesh& mesh, ContactOptions options) {
+  MaterialDepthContact c(mesh, material_depth(mesh), std::move(options));
+  c.begin_step(mesh.X);
+  c.prepare(mesh.X);
+  std::set<std::pair<Index, Index>> out;
+  for (const ContactPair& p : c.pairs()) out.insert({p.tri, p.tet});
+  return out;
+}
+
+// Three overlapping boxes.
+Mesh three_boxes() {
   Mesh m;
   m.add_body("a", box_mesh({Vec3(0, 0, 0), Vec3(1, 1, 0.4), Eigen::Vector3i(4, 4, 2)}));
   m.add_body("b", box_mesh({Vec3(0.2, 0.1, 0.3), Vec3(0.8, 0.7, 0.6), Eigen::Vector3i(3, 3, 2)}));
   m.add_body("c", box_mesh({Vec3(0.1, 0.2, 0.25), Vec3(0.9, 0.6, 0.65), Eigen::Vector3i(4, 2, 2)}));
-  const auto pairs = [&](const Mesh& mesh) {
-    MaterialDepthContact c(mesh, material_depth(mesh), {1e5, true});
-    c.begin_step(mesh.X);
-    c.prepare(mesh.X);
-    std::set<std::pair<Index, Index>> out;
-    for (const ContactPair& p : c.pairs()) out.insert({p.tri, p.tet});
-    return out;
-  };
-  const auto all = pairs(m);
+  return m;
+}
+
+// Pairs of two rigid bodies, whose nodes are all prescribed, are not searched; every other pair
+// is found as without rigid bodies: three overlapping boxes, the outer two rigid.
+TEST(MaterialDepthContact, PairsOfTwoRigidBodiesAreNotSearched) {
+  Mesh m = three_boxes();
+  const auto all = found_pairs(m, {.penalty = 1e5});
   m.bodies[0].rigid = m.bodies[2].rigid = true;
-  const auto searched = pairs(m);
+  const auto searched = found_pairs(m, {.penalty = 1e5});
   std::set<std::pair<Index, Index>> expected;
   Index between_rigid = 0;
   for (const auto& [tri, tet] : all) {
@@ -152,6 +160,26 @@ TEST(MaterialDepthContact, PairsOfTwoRigidBodiesAreNotSearched) {
       expected.insert({tri, tet});
   }
   EXPECT_GT(between_rigid, 10) << "the rigid boxes must overlap";
+  EXPECT_GT(expected.size(), 10u);
+  EXPECT_EQ(searched, expected);
+}
+
+// An excluded interface loses its pairs from both sides (a's triangles in c's tets and c's in
+// a's) and nothing else; an excluded self-contact only the body's own pairs.
+TEST(MaterialDepthContact, ExcludedInterfacesAreNotSearched) {
+  const Mesh m = three_boxes();
+  const auto all = found_pairs(m, {.penalty = 1e5});
+  const auto searched = found_pairs(m, {.penalty = 1e5, .excluded = {{0, 2}, {1, 1}}});
+  std::set<std::pair<Index, Index>> expected;
+  Index excluded = 0;
+  for (const auto& [tri, tet] : all) {
+    const std::set<Index> bodies = {m.tri_body(tri), m.tet_body(tet)};
+    if (bodies == std::set<Index>{0, 2} || bodies == std::set<Index>{1})
+      ++excluded;
+    else
+      expected.insert({tri, tet});
+  }
+  EXPECT_GT(excluded, 10) << "the excluded interfaces must have pairs";
   EXPECT_GT(expected.size(), 10u);
   EXPECT_EQ(searched, expected);
 }
