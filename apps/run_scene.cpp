@@ -33,6 +33,21 @@ std::string format(const char* fmt, auto... args) {
   return buf;
 }
 
+/// The static solver's settings after a preset and the keys beside it, in one line.
+std::string solver_summary(const Scene& scene) {
+  const StaticOptions& o = scene.static_options;
+  const LinearSolverOptions& lin = o.newton.linear;
+  const auto on = [](bool b) { return b ? "on" : "off"; };
+  return "solver preset " + scene.solver_preset + ": linear solver " + to_string(lin.kind) +
+         format(" (tolerance %.3g, at most %d iterations, GMRES restart %d)", lin.tolerance,
+                lin.max_iterations, lin.restart) +
+         ", line search " +
+         (o.newton.line_search == LineSearchRule::kResidual ? "residual" : "energy") + " from " +
+         (o.newton.full_step_first ? "the full step" : "the legal step") + ", gradient fallback " +
+         on(o.newton.gradient_fallback) + ", predictor " + on(o.predictor) + ", linearised start " +
+         on(o.linearised_start) + format(", quasi-viscosity %.3g Pa", scene.quasi_viscosity);
+}
+
 /// What the results file writes per step: the scene's output section, velocities for
 /// time-dependent analyses, contact fields where material-depth or obstacle contact fills them.
 ResultFields result_fields(const Scene& scene) {
@@ -323,6 +338,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
       << " tets, " << mesh.bodies.size() << " bodies, " << threads << " threads, linear solver "
       << to_string(model->static_options.newton.linear.kind) << ", Newton tolerance "
       << format("%.3g", scene.tolerance) << " x E h^2 per dof" << std::endl;
+  if (!scene.solver_preset.empty()) log << solver_summary(scene) << std::endl;
 
   // Writes a completed step into the results file, with the restart record of the model's
   // state: the last completed step is the one written (or the pending one, written at the end:

@@ -46,6 +46,7 @@ struct Scene {
   ContactModel contact = ContactModel::kNone;
   ContactOptions contact_options;
   std::vector<Obstacle> obstacles;
+  std::string solver_preset;       ///< the solver key "preset" ("paper"), or empty
   double quasi_viscosity = 0;      ///< [Pa]; 0: off
   double tolerance = 1e-9;         ///< relative Newton tolerance (see scene docs)
   bool ramp_body_loads = true;     ///< static analysis: gravity scales with the load factor

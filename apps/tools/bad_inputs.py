@@ -235,6 +235,12 @@ def cases(exe):
                        ("linear_tolerance", 0), ("forcing_max", 1)]:
         add("sizes and counts", f"solver.{key} {value}",
             {"scene.json": scene(setter(solver + [key], value))})
+    for key, value in [("preset", "papr"), ("preset", 1), ("preset", ""),
+                       ("gmres_restart", 0), ("gmres_restart", 2**31),
+                       ("line_search_start", "half"), ("gradient_fallback", "yes"),
+                       ("linearised_start", 1)]:
+        add("solver preset and its keys", f"solver.{key} {value!r}",
+            {"scene.json": scene(setter(solver + [key], value))})
     for duration, step in [(1000, 1e-9), (1, 0), (1, -0.01), (-1, 0.01), (0, 0.01)]:
         def dynamic(s, duration=duration, step=step):
             s["analysis"] = "dynamic"

@@ -21,8 +21,10 @@ double scaled_residual(const NewtonOptions& options, const VectorX& g) {
 bool NewtonSolver::line_search(Points& x, const Points& step, double energy, double residual) {
   VectorX g_trial;
   // Start below the first step length at which some module turns illegal (an element would
-  // invert): the energy is infinite there, and halving from 1 would waste trials on it.
-  double alpha = std::min(1.0, kMaxStepFraction * system_.max_step(x, step));
+  // invert): the energy is infinite there, and halving from 1 would waste trials on it; or, as
+  // the paper does, at the full step (full_step_first).
+  double alpha =
+      options_.full_step_first ? 1.0 : std::min(1.0, kMaxStepFraction * system_.max_step(x, step));
   for (int k = 0; k <= options_.max_line_search; ++k, alpha *= 0.5) {
     const Points trial = x + alpha * step;
     system_.prepare(trial);
@@ -117,7 +119,7 @@ NewtonResult NewtonSolver::solve(Points& x) {
     const bool energy_rule = options_.line_search == LineSearchRule::kEnergy;
     bool accepted =
         (!energy_rule || g.dot(dx) < 0) && line_search(x, as_points(dx), energy, residual);
-    if (!accepted) {
+    if (!accepted && options_.gradient_fallback) {
       const VectorX d = H.diagonal().cwiseAbs().cwiseMax(1e-300);
       dx = -g.cwiseQuotient(d);
       accepted = line_search(x, as_points(dx), energy, residual);

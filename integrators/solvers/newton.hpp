@@ -28,6 +28,14 @@ struct NewtonOptions {
   VectorX force_scale;
   /// Step halvings before the line search gives up.
   int max_line_search = 30;
+  /// Where the line search starts: false, at 0.9 of the largest legal step where that is below
+  /// 1 (no trial is spent on an inverted configuration); true, at the full step, halving through
+  /// illegal trials as the paper does.
+  bool full_step_first = false;
+  /// Where the Newton direction fails the line search (or, with the energy rule, is not a
+  /// descent direction), search along the Jacobi-scaled gradient before giving up; false: the
+  /// Newton solve fails at once (the paper's algorithm, which has no fallback).
+  bool gradient_fallback = true;
   /// Inexact Newton: the linear solve of step k may stop at |b - A dx| <= eta_k |b|, with
   /// Eisenstat and Walker's second choice eta_k = 0.9 (r_k / r_(k-1))^2 (r: the residual norm;
   /// raised to 0.9 eta_(k-1)^2 where that is above 0.1), at most forcing_max; the first step is
@@ -58,13 +66,13 @@ struct NewtonResult {
 
 /// Minimises the energy of a System over the free directions of its Constraints.
 /// Each step solves (P H P + C) dx = -P g, then halves the step, starting from 1 or 0.9 of the
-/// System's max_step (whichever is smaller), until the configuration is legal (finite energy) and
-/// the line-search rule holds (the paper's damping factor). The paper asks
-/// for a lower residual; in bending that rejects good Newton steps (a linearised rotation
-/// stretches fibers, so the full step raises the residual while it lowers the energy, and Newton
-/// crawls), so the default asks for a lower energy. Where the Newton direction is not a descent
-/// direction (an indefinite Hessian: buckling, deep contact) or its search fails, the step falls
-/// back to the Jacobi-scaled gradient.
+/// System's max_step (whichever is smaller; from 1 with full_step_first), until the configuration
+/// is legal (finite energy) and the line-search rule holds (the paper's damping factor). The
+/// paper asks for a lower residual; in bending that rejects good Newton steps (a linearised
+/// rotation stretches fibers, so the full step raises the residual while it lowers the energy, and
+/// Newton crawls), so the default asks for a lower energy. Where the Newton direction is not a
+/// descent direction (an indefinite Hessian: buckling, deep contact) or its search fails, the step
+/// falls back to the Jacobi-scaled gradient (unless gradient_fallback is off).
 class NewtonSolver {
  public:
   NewtonSolver(System& system, const Constraints& constraints, NewtonOptions options)

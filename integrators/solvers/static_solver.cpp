@@ -20,13 +20,16 @@ bool StaticSolver::legal_start(const Points& x, double target, Points& trial) {
   system.prepare(trial);
   if (std::isfinite(system.energy(trial))) return true;
   // An illegal trial (the predictor, or the prescribed motion alone, inverts a tet): carry the
-  // prescribed motion into the body by the stiffness at x, else give up on the increment.
+  // prescribed motion into the body by the stiffness at x (linearised_start), else try the
+  // motion alone, else give up on the increment (it is halved).
   Points moved = x;
   constraints.impose(target, moved);
-  trial = newton_.linearised_step(x, moved - x);
-  constraints.impose(target, trial);
-  system.prepare(trial);
-  if (std::isfinite(system.energy(trial))) return true;
+  if (options_.linearised_start) {
+    trial = newton_.linearised_step(x, moved - x);
+    constraints.impose(target, trial);
+    system.prepare(trial);
+    if (std::isfinite(system.energy(trial))) return true;
+  }
   trial = moved;
   system.prepare(trial);
   if (std::isfinite(system.energy(trial))) return true;

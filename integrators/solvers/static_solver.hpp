@@ -14,6 +14,10 @@ struct StaticOptions {
   double max_increment = 1.0;
   double growth = 2.0;    ///< increment factor after two successes in a row
   bool predictor = true;  ///< extrapolate the last two solutions (two-point predictor)
+  /// Where the predicted start of an increment is illegal, try the prescribed motion carried
+  /// into the body by the stiffness (NewtonSolver::linearised_step) before the motion alone;
+  /// false: the motion alone, and the increment is halved if that is illegal too (the paper).
+  bool linearised_start = true;
   /// With quasi-viscosity: steps at full load after loading, until the viscous force is
   /// below the Newton tolerance (the body has come to rest), at most this many.
   int max_settle_steps = 200;
@@ -54,8 +58,8 @@ class StaticSolver {
   /// why) when it does not converge.
   bool attempt(Points& x, Path& path, double target, bool settling);
   /// Makes `trial` (prepared) a legal configuration to start Newton from at `target`: as it is,
-  /// else the prescribed motion carried into the body by the stiffness at x, else the prescribed
-  /// motion alone. False when all three invert a tet.
+  /// else the prescribed motion carried into the body by the stiffness at x (with
+  /// linearised_start), else the prescribed motion alone. False when all of them invert a tet.
   bool legal_start(const Points& x, double target, Points& trial);
 
   StepLifecycle& lifecycle_;

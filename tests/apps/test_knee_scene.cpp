@@ -100,6 +100,57 @@ TEST(KneeScene, IncompressibleVariantTakesNodalPressureAtPoisson049) {
     EXPECT_EQ(inc.constraints[k].name, mr.constraints[k].name);
 }
 
+// The paper-algorithm variant: knee_flexion.json under the solver preset "paper" (every setting
+// of apps/README.md's table in force), with the knee's own increments, Newton tolerance and cap.
+TEST(KneeScene, PaperVariantIsTheKneeUnderThePaperPreset) {
+  const Scene knee = load("knee_flexion"), paper = load("knee_flexion_paper");
+  EXPECT_EQ(paper.solver_preset, "paper");
+  EXPECT_EQ(paper.mesh.num_tets(), knee.mesh.num_tets());
+  ASSERT_EQ(paper.constraints.size(), knee.constraints.size());
+  for (size_t k = 0; k < paper.constraints.size(); ++k)
+    EXPECT_EQ(paper.constraints[k].name, knee.constraints[k].name);
+  EXPECT_EQ(paper.contact_options.penalty, knee.contact_options.penalty);
+  EXPECT_EQ(paper.contact_options.excluded, knee.contact_options.excluded);
+  const StaticOptions &p = paper.static_options, &k = knee.static_options;
+  EXPECT_EQ(p.initial_increment, k.initial_increment);
+  EXPECT_EQ(p.max_increment, k.max_increment);
+  EXPECT_EQ(p.min_increment, k.min_increment);
+  EXPECT_EQ(p.newton.max_iterations, k.newton.max_iterations);
+  EXPECT_EQ(paper.tolerance, knee.tolerance);
+  // The preset's settings (apps/README.md, "Solver presets").
+  EXPECT_EQ(p.newton.linear.kind, LinearSolverKind::kGmres);
+  EXPECT_EQ(p.newton.linear.tolerance, 0.1);
+  EXPECT_EQ(p.newton.linear.max_iterations, 1000);
+  EXPECT_EQ(p.newton.linear.restart, 200);
+  EXPECT_EQ(p.newton.line_search, LineSearchRule::kResidual);
+  EXPECT_TRUE(p.newton.full_step_first);
+  EXPECT_FALSE(p.newton.gradient_fallback);
+  EXPECT_TRUE(p.predictor);
+  EXPECT_FALSE(p.linearised_start);
+  EXPECT_EQ(paper.quasi_viscosity, 300.0);
+  // depthfem's defaults, which the preset changes.
+  EXPECT_EQ(k.newton.line_search, LineSearchRule::kEnergy);
+  EXPECT_FALSE(k.newton.full_step_first);
+  EXPECT_TRUE(k.newton.gradient_fallback);
+  EXPECT_TRUE(k.linearised_start);
+  EXPECT_EQ(knee.quasi_viscosity, 0.0);
+}
+
+// Keys beside the preset override it, each on its own; the others keep the preset's value.
+TEST(KneeScene, KeysBesideThePresetOverrideIt) {
+  const Scene s =
+      load("knee_flexion_paper", {"solver.line_search=energy", "solver.gmres_restart=7",
+                                  "solver.quasi_viscosity=0", "solver.linearised_start=true"});
+  const StaticOptions& o = s.static_options;
+  EXPECT_EQ(o.newton.line_search, LineSearchRule::kEnergy);
+  EXPECT_EQ(o.newton.linear.restart, 7);
+  EXPECT_EQ(s.quasi_viscosity, 0.0);
+  EXPECT_TRUE(o.linearised_start);
+  EXPECT_EQ(o.newton.linear.kind, LinearSolverKind::kGmres);
+  EXPECT_TRUE(o.newton.full_step_first);
+  EXPECT_FALSE(o.newton.gradient_fallback);
+}
+
 // Three steps of 0.5 degrees: about as long as one of the full run's first 3 degree steps, with
 // more chances to catch a step that fails.
 TEST(KneeScene, FirstStepsConvergeWithoutInversionOrDeepPenetration) {

@@ -237,6 +237,7 @@ TEST(StaticScenes, EveryShippedSceneIsTested) {
                                         "knee_flexion_fine",
                                         "knee_flexion_veronda",
                                         "knee_flexion_incompressible",
+                                        "knee_flexion_paper",
                                         "falling_bars_viscoelastic"};
   for (const auto& entry :
        std::filesystem::directory_iterator(std::string(DEPTHFEM_SOURCE_DIR) + "/apps/scenes")) {

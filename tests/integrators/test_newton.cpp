@@ -1,9 +1,10 @@
 // Newton with line search on energies whose minimiser is known in closed form, and the line
-// search starting below the modules' max_step.
+// search starting below the modules' max_step or, as the paper's, at the full step.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "integrators/solvers/newton.hpp"
 
@@ -98,28 +99,47 @@ class Wall final : public ForceModule {
   Index block_ = 0;
 };
 
-TEST(Newton, LineSearchStartsBelowTheModulesMaxStep) {
-  // Root of k (s - s_t)(1 - s) = mu inside the wall.
+// Root of k (s - s_t)(1 - s) = mu inside the wall.
+double wall_minimiser() {
   const double b = 1 + Wall::s_t, c = Wall::s_t - Wall::mu / Wall::k;
-  const double exact = 0.5 * (b - std::sqrt(b * b - 4 * c));
-  int illegal[2];
-  for (bool limits : {true, false}) {
-    PhaseTimers timers;
-    System system(1, timers);
-    Wall& wall = system.add(std::make_unique<Wall>(limits));
-    // The other two coordinates are held, the wall acts along x.
-    const Constraints fixed_yz(Points::Zero(1, 3), {{"yz", {0}, OnLine{Vec3::UnitX()}}});
-    NewtonOptions options;
-    options.tolerance = 1e-12;
-    NewtonSolver newton(system, fixed_yz, options);
-    Points x = Points::Zero(1, 3);
-    const NewtonResult r = newton.solve(x);
-    ASSERT_TRUE(r.converged) << r.failure;
-    EXPECT_NEAR(x(0, 0), exact, 1e-12);
-    illegal[limits ? 0 : 1] = wall.illegal;
-  }
-  EXPECT_EQ(illegal[0], 0) << "with max_step no trial point crosses the wall";
-  EXPECT_GT(illegal[1], 0) << "without it the full Newton step does (the test would notice)";
+  return 0.5 * (b - std::sqrt(b * b - 4 * c));
+}
+
+// Newton from x = 0 to 1e-12 on the wall, the other two coordinates held: the position reached
+// and the number of illegal trial points (a failed test where Newton does not converge).
+std::pair<double, int> solve_wall(bool limits_step, NewtonOptions options) {
+  PhaseTimers timers;
+  System system(1, timers);
+  Wall& wall = system.add(std::make_unique<Wall>(limits_step));
+  const Constraints fixed_yz(Points::Zero(1, 3), {{"yz", {0}, OnLine{Vec3::UnitX()}}});
+  options.tolerance = 1e-12;
+  NewtonSolver newton(system, fixed_yz, options);
+  Points x = Points::Zero(1, 3);
+  const NewtonResult r = newton.solve(x);
+  EXPECT_TRUE(r.converged) << r.failure;
+  return {x(0, 0), wall.illegal};
+}
+
+TEST(Newton, LineSearchStartsBelowTheModulesMaxStep) {
+  const auto [with_limit, illegal_with_limit] = solve_wall(true, {});
+  const auto [without_limit, illegal_without_limit] = solve_wall(false, {});
+  EXPECT_NEAR(with_limit, wall_minimiser(), 1e-12);
+  EXPECT_NEAR(without_limit, wall_minimiser(), 1e-12);
+  EXPECT_EQ(illegal_with_limit, 0) << "with max_step no trial point crosses the wall";
+  EXPECT_GT(illegal_without_limit, 0)
+      << "without it the full Newton step does (the test would notice)";
+}
+
+// The paper's line search (full_step_first): the full Newton step is tried even where the
+// module knows it crosses the wall, and halved through the illegal trials to the same minimiser.
+TEST(Newton, FullStepFirstHalvesThroughIllegalTrials) {
+  NewtonOptions options;
+  options.line_search = LineSearchRule::kResidual;
+  options.full_step_first = true;
+  options.gradient_fallback = false;
+  const auto [s, illegal] = solve_wall(true, options);
+  EXPECT_NEAR(s, wall_minimiser(), 1e-12);
+  EXPECT_GT(illegal, 0) << "the full step from x = 0 crosses the wall at s = 1";
 }
 
 }  // namespace
