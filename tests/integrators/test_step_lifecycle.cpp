@@ -10,10 +10,9 @@
 #include "core/mass.hpp"
 #include "core/mesh_generators.hpp"
 #include "integrators/forces/elasticity.hpp"
+#include "integrators/run_stepper.hpp"
 #include "integrators/solvers/implicit_stepper.hpp"
 #include "integrators/solvers/static_solver.hpp"
-#include "integrators/solvers/sundials_stepper.hpp"
-#include "integrators/solvers/symplectic_euler.hpp"
 
 namespace depthfem {
 namespace {
@@ -150,11 +149,7 @@ TEST(StepLifecycle, ExplicitSchemesFollowItAndEndExactlyAtTheDuration) {
     Rig rig;
     Points x = rig.X, v = Points::Zero(3, 3);
     const VectorX mass = VectorX::Constant(3, 200.0);  // period 14 s: 0.3 s steps are stable
-    if (scheme == Integrator::kArkode) {
-      SundialsStepper(rig.lifecycle, mass, three_tenths(scheme)).run(x, v);
-    } else {
-      SymplecticEuler(rig.lifecycle, mass, three_tenths(scheme), 1.0).run(x, v);
-    }
+    testing::run_stepper(rig.lifecycle, mass, three_tenths(scheme), {}, 1.0, x, v);
     expect_times(rig.steps);
     rig.expect_lifecycle(1.0);
   }
@@ -189,11 +184,7 @@ TEST(StepLifecycle, MovingObstacleMovesUnderExplicitIntegrators) {
     o.duration = 0.1;
     const VectorX mass = lumped_mass(mesh.X, mesh.tets, VectorX::Constant(mesh.num_tets(), 1000.0));
     Points x = mesh.X, v = Points::Zero(mesh.num_nodes(), 3);
-    if (scheme == Integrator::kArkode) {
-      SundialsStepper(lifecycle, mass, o).run(x, v);
-    } else {
-      SymplecticEuler(lifecycle, mass, o, 1.0).run(x, v);
-    }
+    testing::run_stepper(lifecycle, mass, o, {}, 1.0, x, v);
     ASSERT_FALSE(steps.empty());
     ASSERT_EQ(steps.back().contact.size(), 1u);
     EXPECT_EQ(steps.front().contact[0].force.z(), 0.0) << "no contact at first";

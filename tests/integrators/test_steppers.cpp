@@ -12,9 +12,7 @@
 
 #include "core/error.hpp"
 #include "integrators/forces/gravity.hpp"
-#include "integrators/solvers/implicit_stepper.hpp"
-#include "integrators/solvers/sundials_stepper.hpp"
-#include "integrators/solvers/symplectic_euler.hpp"
+#include "integrators/run_stepper.hpp"
 
 namespace depthfem {
 namespace {
@@ -91,25 +89,9 @@ Trajectory simulate(const Problem& p, const DynamicOptions& o) {
                           });
   Points x = p.x0.transpose(), v = p.v0.transpose();
   const VectorX m = VectorX::Constant(1, p.m);
-  switch (o.integrator) {
-    case Integrator::kImplicitEuler:
-    case Integrator::kNewmark:
-    case Integrator::kGeneralizedAlpha:
-      ImplicitStepper(lifecycle, {inertia, {}}, o).run(x, v);
-      break;
-    case Integrator::kSymplecticEuler:
-      // A spring is stable below h = 2 / omega; free fall at any step.
-      SymplecticEuler(lifecycle, m, o, p.k > 0 ? 2 / p.omega() : kInf).run(x, v);
-      break;
-    case Integrator::kArkode:
-    case Integrator::kArkodeDirk:
-    case Integrator::kCvodeBdf: {
-      SundialsStepper stepper(lifecycle, m, o, {inertia, {}});
-      stepper.run(x, v);
-      out.internal = stepper.history();
-      break;
-    }
-  }
+  // A spring is stable below h = 2 / omega (symplectic Euler); free fall at any step.
+  out.internal =
+      testing::run_stepper(lifecycle, m, o, {inertia, {}}, p.k > 0 ? 2 / p.omega() : kInf, x, v);
   return out;
 }
 

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <complex>
 #include <functional>
+#include <limits>
 #include <numbers>
 #include <numeric>
 #include <random>
@@ -24,9 +25,7 @@
 #include "integrators/assembled.hpp"
 #include "integrators/forces/elasticity.hpp"
 #include "integrators/forces/gravity.hpp"
-#include "integrators/solvers/implicit_stepper.hpp"
-#include "integrators/solvers/sundials_stepper.hpp"
-#include "integrators/solvers/symplectic_euler.hpp"
+#include "integrators/run_stepper.hpp"
 #include "materials/all_models.hpp"
 
 namespace depthfem {
@@ -374,23 +373,7 @@ TEST(Viscoelasticity, EveryIntegratorFollowsAConstantStrainRate) {
           ++checked;
         });
     Points x = m.X, v = Points::Zero(m.X.rows(), 3);
-    switch (scheme) {
-      case Integrator::kImplicitEuler:
-      case Integrator::kNewmark:
-      case Integrator::kGeneralizedAlpha:
-        ImplicitStepper(lifecycle, {inertia, {}}, o).run(x, v);
-        break;
-      case Integrator::kSymplecticEuler:
-        SymplecticEuler(lifecycle, mass, o, 1.0).run(x, v);
-        break;
-      case Integrator::kArkode:
-        SundialsStepper(lifecycle, mass, o).run(x, v);
-        break;
-      case Integrator::kArkodeDirk:
-      case Integrator::kCvodeBdf:
-        SundialsStepper(lifecycle, mass, o, {inertia, {}}).run(x, v);
-        break;
-    }
+    testing::run_stepper(lifecycle, mass, o, {inertia, {}}, 1.0, x, v);
     EXPECT_EQ(checked, 20) << int(scheme);
   }
 }
@@ -548,11 +531,8 @@ TEST(Viscoelasticity, CantileverLossFactorMatchesTheLinearViscoelasticPrediction
                               q.push_back(Mphi.dot(as_dofs(x) - as_dofs(m.X)));
                             });
     Points x = m.X, v = as_points(1e-3 / phi.cwiseAbs().maxCoeff() * phi);
-    if (scheme == Integrator::kNewmark) {
-      ImplicitStepper(lifecycle, {inertia, {}}, o).run(x, v);
-    } else {
-      SundialsStepper(lifecycle, mass, o, {inertia, {}}).run(x, v);
-    }
+    testing::run_stepper(lifecycle, mass, o, {inertia, {}}, std::numeric_limits<double>::infinity(),
+                         x, v);
 
     // Peaks of |q| after the first period, by a parabola through each local maximum and its
     // neighbours; decrement per period from successive peaks of one sign (two half periods).
