@@ -455,6 +455,14 @@ void read_contact(JsonObject c, Scene& scene, const std::vector<std::string>& bo
       c.fail("exclude", "only for the material_depth model");
     scene.contact_options.excluded = read_excluded(c, bodies, scene.contact_options.self_contact);
   }
+  if (c.has("list_margin")) {
+    if (scene.contact != ContactModel::kMaterialDepth)
+      c.fail("list_margin", "only for the material_depth model");
+    scene.contact_options.list_margin = c.number("list_margin");
+    if (!(scene.contact_options.list_margin >= 0 && scene.contact_options.list_margin <= 10))
+      c.fail("list_margin", "must be between 0 and 10 mean edge lengths");
+    scene.list_margin_given = true;
+  }
   c.finish();
 }
 
@@ -625,9 +633,11 @@ void apply_paper_preset(Scene& scene) {
   // elements." The constant: measured.
   scene.quasi_viscosity = kPaperQuasiViscosity;
   // 5.5: "the tree structure is built only once at the beginning of each run. The interval
-  // values are efficiently updated in a bottom-up manner at every solution step." depthfem
-  // always does so, a run being one load increment (the paper's knee: one 3-degree interval):
-  // MaterialDepthContact::begin_step builds, prepare refits.
+  // values are efficiently updated in a bottom-up manner at every solution step." A run being
+  // one load increment (the paper's knee: one 3-degree interval), MaterialDepthContact::begin_step
+  // builds the trees; without depthfem's candidate list, prepare refits and searches them at
+  // every solution step.
+  if (!scene.list_margin_given) scene.contact_options.list_margin = 0;
 }
 
 void read_solver(JsonObject s, Scene& scene) {

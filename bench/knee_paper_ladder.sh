@@ -22,7 +22,8 @@ rungs=(
   "direct solver|solver.linear_solver=direct"
   "energy line search|solver.linear_solver=direct solver.line_search=energy"
   "depthfem's Newton details|solver.linear_solver=direct solver.line_search=energy solver.line_search_start=legal solver.gradient_fallback=true solver.linearised_start=true"
-  "no quasi-viscosity (default)|solver.linear_solver=direct solver.line_search=energy solver.line_search_start=legal solver.gradient_fallback=true solver.linearised_start=true solver.quasi_viscosity=0"
+  "no quasi-viscosity|solver.linear_solver=direct solver.line_search=energy solver.line_search_start=legal solver.gradient_fallback=true solver.linearised_start=true solver.quasi_viscosity=0"
+  "candidate list (default)|solver.linear_solver=direct solver.line_search=energy solver.line_search_start=legal solver.gradient_fallback=true solver.linearised_start=true solver.quasi_viscosity=0 contact.list_margin=0.1"
 )
 echo "round,rung,name,loaded,wall_s,newton,linear,force_stiffness_s,collision_s,linear_solve_s,other_s,load_average"
 for round in $(seq 1 "$ROUNDS"); do

@@ -16,8 +16,6 @@ namespace depthfem {
 
 namespace {
 constexpr Index kChunk = 256;  // triangles per task of the pair search
-/// The candidate list's margin per mean edge length (bench/results/contact.md).
-constexpr double kListMargin = 0.1;
 
 std::array<Vec3, 4> tet_corners(const Points& x, const TetIndices& tets, Index t) {
   return {x.row(tets(t, 0)), x.row(tets(t, 1)), x.row(tets(t, 2)), x.row(tets(t, 3))};
@@ -51,7 +49,7 @@ MaterialDepthContact::MaterialDepthContact(const Mesh& mesh, VectorX depth, Cont
   // Sub-triangles with area below 1e-12 of a typical element face count as degenerate.
   const double h = mean_edge_length(mesh.X, mesh.tets);
   min_area2_ = std::pow(1e-12 * h * h, 2);
-  margin_ = kListMargin * h;
+  margin_ = options_.list_margin * h;
   build_trees(mesh.X);
 }
 

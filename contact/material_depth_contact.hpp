@@ -25,6 +25,9 @@ struct ContactOptions {
   /// conditions hold together, such as a tissue attached to a bone, whose coinciding surfaces
   /// only touch. Their report rows stay, at zero.
   std::vector<std::array<Index, 2>> excluded = {};
+  /// The candidate list's margin per mean edge length (bench/results/knee.md, third round); 0
+  /// searches the refitted trees at every prepare() where a node has moved.
+  double list_margin = 0.1;
 };
 
 /// A boundary triangle cutting a tet, with the polygon they share.

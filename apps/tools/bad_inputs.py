@@ -368,7 +368,9 @@ def cases(exe):
                        ("negative penalty", setter(["contact"], {"model": "material_depth",
                                                                  "penalty": -1})),
                        ("unknown excluded interface", setter(["contact"], {
-                           "model": "material_depth", "penalty": 1e6, "exclude": ["bar/floor"]}))]:
+                           "model": "material_depth", "penalty": 1e6, "exclude": ["bar/floor"]})),
+                       ("negative list margin", setter(["contact"], {
+                           "model": "material_depth", "penalty": 1e6, "list_margin": -0.1}))]:
         add("boundary and contact", name, {"scene.json": scene(edit)})
 
     # Mesh files: Gmsh.
