@@ -491,8 +491,8 @@ TEST(PatchVolume, DISABLED_CooksMembraneFinestMesh) {
   EXPECT_LT(fine.patch, 0.5 * coarse.patch);
 }
 
-// Patches of other target sizes (greedy, not aligned with the hexahedra but for 12 = two of
-// them), meshes 4 to 32: the same convergence; the tip displacements are printed (about 10 s).
+// Patches of other greedy target sizes (not the hexahedra), meshes 4 to 32: the same
+// convergence; the tip displacements are printed (about 10 s).
 TEST(PatchVolume, DISABLED_CooksMembraneOtherPatchSizes) {
   for (int size : {4, 8, 12}) {
     double previous = 1;
