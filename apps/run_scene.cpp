@@ -352,7 +352,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     if (fields.stress || fields.strain) {
       PhaseTimers::Scope t(result.timers, "output: element fields");
       const VectorX pressure =
-          model->nodal_volume ? model->nodal_volume->nodal_pressures(x) : VectorX();
+          model->patch_volume ? model->patch_volume->tet_pressures(x) : VectorX();
       elements = element_fields(mesh.X, mesh.tets, scene.groups, x, {fields.stress, fields.strain},
                                 &pressure);
     }
