@@ -152,14 +152,14 @@ std::unique_ptr<ResultsFile> open_results(const Scene& scene, const RunOptions& 
                .version = kVersion,
                .analysis = to_string(scene.analysis),
                .threads = threads,
-               .ranks = ranks,
                .constraint_names = {},
                .contact_names = model.system.interface_names(),
                .body_materials = std::move(materials.bodies),
                .region_materials = std::move(materials.regions),
                .fields = fields,
                .initial_velocity = fields.velocity ? scene.initial_velocity : Points(),
-               .restart = restart_layout(scene, model)};
+               .restart = restart_layout(scene, model),
+               .ranks = ranks};
   for (const Constraint& c : scene.constraints) info.constraint_names.push_back(c.name);
   return std::make_unique<ResultsFile>(options.out, scene.mesh, model.depth, info);
 }

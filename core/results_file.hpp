@@ -90,7 +90,6 @@ struct RunInfo {
   std::string version;                        ///< depthfem version
   std::string analysis;                       ///< "static", "dynamic", ...
   int threads = 1;                            ///< worker threads of the run (per rank)
-  int ranks = 1;                              ///< processes of the run (mpirun -n)
   std::vector<std::string> constraint_names;  ///< one per boundary condition, the reaction rows
   /// One per contact interface, in the order every step reports them (StepRecord::contact).
   std::vector<std::string> contact_names;
@@ -101,6 +100,7 @@ struct RunInfo {
   ResultFields fields;         ///< the per-step fields every step will hold
   Points initial_velocity;     ///< #nodes x 3 [m/s], when fields.velocity
   RestartLayout restart = {};  ///< what every step's restart record holds (none: no /restart)
+  int ranks = 1;               ///< processes of the run (mpirun -n)
 };
 
 /// Writes a results file. Every call leaves the file flushed and complete up to that call, so a

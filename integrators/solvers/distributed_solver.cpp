@@ -96,25 +96,9 @@ KSP DistributedSolver::Impl::make_ksp(DistributedMethod method) const {
         petsc_check(MatMumpsSetIcntl(factor, 14, 100), "MatMumpsSetIcntl");
       }
       break;
-    case DistributedMethod::kAmg: {
-      petsc_check(KSPSetType(solver, KSPCG), "KSPSetType");
-      petsc_check(KSPSetNormType(solver, KSP_NORM_UNPRECONDITIONED), "KSPSetNormType");
-      petsc_check(KSPSetTolerances(solver, options.amg.tolerance, 0.0, PETSC_DEFAULT,
-                                   options.amg.max_iterations),
-                  "KSPSetTolerances");
-      if (options.amg.preconditioner == AmgPreconditioner::kGamg) {
-        // The serial AMG solver's settings (amg_solver.cpp says why).
-        petsc_check(PCSetType(pc, PCGAMG), "PCSetType");
-        petsc_check(PCGAMGSetReuseInterpolation(pc, PETSC_TRUE), "PCGAMGSetReuseInterpolation");
-        PetscReal threshold = 0.02;
-        petsc_check(PCGAMGSetThreshold(pc, &threshold, 1), "PCGAMGSetThreshold");
-        petsc_check(PCGAMGSetCoarseEqLim(pc, 1000), "PCGAMGSetCoarseEqLim");
-      } else {
-        petsc_check(PCSetType(pc, PCHYPRE), "PCSetType");
-        petsc_check(PCHYPRESetType(pc, "boomeramg"), "PCHYPRESetType");
-      }
+    case DistributedMethod::kAmg:
+      configure_amg_cg(solver, options.amg);
       break;
-    }
     case DistributedMethod::kGmres:
     case DistributedMethod::kCg:
       // As the serial Jacobi methods: the true residual, |b - A x| <= tolerance |b|.

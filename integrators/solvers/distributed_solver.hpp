@@ -39,7 +39,10 @@ struct DistributedSolveStats {
 /// its non-zero 3x3 blocks (ADD_VALUES) and PETSc's assembly carries those of other ranks' rows to
 /// them. Its layout is preallocated (MATPREALLOCATOR) whenever some rank's pattern changed; the
 /// solution is scattered back to every rank (VecScatterCreateToAll). PETSC_OPTIONS overrides
-/// the method (-ksp_type, -pc_type, -pc_factor_mat_solver_type).
+/// the method (-ksp_type, -pc_type, -pc_factor_mat_solver_type). Newton projects each rank's
+/// part (Constraints::project), which puts a constrained node's C on its diagonal once per rank
+/// whose part touches the node: those directions stay decoupled with a zero right-hand side, so
+/// the step is the same, only their diagonal is scaled.
 class DistributedSolver {
  public:
   DistributedSolver(Ranks& ranks, DistributedSolverOptions options);

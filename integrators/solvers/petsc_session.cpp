@@ -1,6 +1,6 @@
 #include "integrators/solvers/petsc_session.hpp"
 
-#include <petscsys.h>
+#include <petscksp.h>
 
 #include <cstdlib>
 #include <stdexcept>
@@ -54,6 +54,28 @@ struct PetscSession {
 };
 
 }  // namespace
+
+void configure_amg_cg(KSP ksp, const AmgSolverOptions& options) {
+  petsc_check(KSPSetType(ksp, KSPCG), "KSPSetType");
+  petsc_check(KSPSetNormType(ksp, KSP_NORM_UNPRECONDITIONED), "KSPSetNormType");
+  petsc_check(KSPSetTolerances(ksp, options.tolerance, 0.0, PETSC_DEFAULT, options.max_iterations),
+              "KSPSetTolerances");
+  PC pc;
+  petsc_check(KSPGetPC(ksp, &pc), "KSPGetPC");
+  if (options.preconditioner == AmgPreconditioner::kGamg) {
+    petsc_check(PCSetType(pc, PCGAMG), "PCSetType");
+    petsc_check(PCGAMGSetReuseInterpolation(pc, PETSC_TRUE), "PCGAMGSetReuseInterpolation");
+    // Dropping graph edges weaker than 2 % of the diagonal from the aggregation and stopping at
+    // 1000 coarse unknowns: on the bent cantilever (95 k and 266 k unknowns) CG needs 32 and 33
+    // iterations for three Newton steps instead of 52 and 55 (PETSc's defaults 0 and 50).
+    PetscReal threshold = 0.02;
+    petsc_check(PCGAMGSetThreshold(pc, &threshold, 1), "PCGAMGSetThreshold");
+    petsc_check(PCGAMGSetCoarseEqLim(pc, 1000), "PCGAMGSetCoarseEqLim");
+  } else {
+    petsc_check(PCSetType(pc, PCHYPRE), "PCSetType");
+    petsc_check(PCHYPRESetType(pc, "boomeramg"), "PCHYPRESetType");
+  }
+}
 
 void start_petsc() {
   static PetscSession session;

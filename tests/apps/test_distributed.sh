@@ -27,15 +27,8 @@ mpi 3 "$exe" run "$src/apps/scenes/uniaxial_block.json" --out "$tmp/three.h5" > 
 compare "$tmp/uniaxial_block.h5" "$tmp/three.h5" > "$tmp/three.cmp" || fail "3 ranks: $(tail -2 "$tmp/three.cmp")"
 
 # A solve that fails on every rank: one line, exit 1, the completed steps kept by rank 0.
-mpi 2 "$exe" run "$src/apps/scenes/uniaxial_block.json" --out "$tmp/bad.h5" --set boundary.3.offset=-1.5 \
-  --set solver.min_increment=0.01 > /dev/null 2> "$tmp/err.log"
-rc=$?
-[ $rc -eq 1 ] || fail "failed distributed run exited $rc, expected 1"
-[ "$(wc -l < "$tmp/err.log")" -eq 1 ] || fail "expected one error line, got: $(cat "$tmp/err.log")"
-grep -q "^depthfem: error: .*load increment fell below min_increment" "$tmp/err.log" || fail "error line: $(cat "$tmp/err.log")"
-"$exe" info "$tmp/bad.h5" > "$tmp/info.log" || fail "info on the failed run exited $?"
-grep -q "status: failed" "$tmp/info.log" || fail "failed run not marked failed"
-grep -Eq "steps: [1-9]" "$tmp/info.log" || fail "failed run kept no steps"
+source "$src/tests/apps/failed_run.sh"
+check_failed_run mpi 2
 
 # Bad input, met by every rank before they start: one line, exit 1.
 mpi 2 "$exe" run "$src/apps/scenes/uniaxial_block.json" --out "$tmp/in.h5" --set solver.min_increment=-1 \
