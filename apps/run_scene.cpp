@@ -45,7 +45,8 @@ std::string solver_summary(const Scene& scene) {
          (o.newton.line_search == LineSearchRule::kResidual ? "residual" : "energy") + " from " +
          (o.newton.full_step_first ? "the full step" : "the legal step") + ", gradient fallback " +
          on(o.newton.gradient_fallback) + ", predictor " + on(o.predictor) + ", linearised start " +
-         on(o.linearised_start) + format(", quasi-viscosity %.3g Pa", scene.quasi_viscosity);
+         on(o.linearised_start) + format(", quasi-viscosity %.3g Pa", scene.quasi_viscosity) +
+         format(", contact candidate list margin %.3g", scene.contact_options.list_margin);
 }
 
 /// What the results file writes per step: the scene's output section, velocities for
@@ -378,7 +379,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     if (fields.stress || fields.strain) {
       PhaseTimers::Scope t(result.timers, "output: element fields");
       const VectorX pressure =
-          model->nodal_volume ? model->nodal_volume->nodal_pressures(x) : VectorX();
+          model->patch_volume ? model->patch_volume->tet_pressures(x) : VectorX();
       elements = element_fields(mesh.X, mesh.tets, scene.groups, x, {fields.stress, fields.strain},
                                 &pressure);
     }

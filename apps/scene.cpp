@@ -160,16 +160,34 @@ PronySeries read_viscoelastic(JsonObject v) {
   return p;
 }
 
-// Material parameters by model name; the keys are those of the model's struct.
-MaterialModel read_material(JsonObject m, Vec3& fiber_direction, VolumeFormulation& formulation,
-                            PronySeries& viscoelastic) {
+// A body's materials: one for the whole body (region empty) or one per element region.
+struct BodyMaterial {
+  std::string region;
+  MaterialModel model;
+  Vec3 fiber = Vec3::UnitX();
+  VolumeFormulation formulation = VolumeFormulation::kStandard;
+  int patch_size = 6;        // tets per patch of the patch-volume formulation
+  PronySeries viscoelastic;  // empty: elastic
+  std::string path;          // the scene key, for messages
+};
+
+// Material parameters by model name (the keys are those of the model's struct), with the
+// formulation and the relaxation, into `into` (its region and path are the caller's).
+void read_material(JsonObject m, BodyMaterial& into) {
   const std::string model = m.string("model");
   // Every model has an isochoric part (materials/isochoric.hpp) and a small-strain bulk
-  // modulus, so every model takes either formulation.
-  formulation =
-      m.choice<VolumeFormulation>("formulation", "formulation",
-                                  {{"standard", VolumeFormulation::kStandard},
-                                   {"nodal_pressure", VolumeFormulation::kNodalPressure}});
+  // modulus, so every model takes every formulation.
+  VolumeFormulation& formulation = into.formulation;
+  formulation = m.choice<VolumeFormulation>("formulation", "formulation",
+                                            {{"standard", VolumeFormulation::kStandard},
+                                             {"nodal_pressure", VolumeFormulation::kNodalPressure},
+                                             {"patch_volume", VolumeFormulation::kPatchVolume}});
+  if (formulation == VolumeFormulation::kPatchVolume) {
+    into.patch_size = m.integer("patch_size", into.patch_size);
+    if (into.patch_size < 1) m.fail("patch_size", "must be >= 1 (tets per patch)");
+  } else if (m.has("patch_size")) {
+    m.fail("patch_size", "needs \"formulation\": \"patch_volume\"");
+  }
   MaterialModel out;
   // Young's modulus and Poisson's ratio are converted by the model; range errors are reported
   // at the key they concern.
@@ -209,13 +227,13 @@ MaterialModel read_material(JsonObject m, Vec3& fiber_direction, VolumeFormulati
             "' (expected neo_hookean, mooney_rivlin, veronda, nearly_incompressible_mooney_rivlin, "
             "fiber_mooney_rivlin or fiber_veronda)");
   }
-  if (material_uses_fiber(out)) fiber_direction = m.vec3("fiber_direction");
+  if (material_uses_fiber(out)) into.fiber = m.vec3("fiber_direction");
   if (m.has("viscoelastic")) {
-    // Relaxation on nodal-pressure tets (isochoric part per tet, volume per node) is not
-    // verified by any test, so the combination is refused rather than run unchecked.
+    // Relaxation on nodal-pressure or patch-volume tets (isochoric part per tet, volume per patch)
+    // is not verified by any test, so the combination is refused rather than run unchecked.
     if (formulation != VolumeFormulation::kStandard)
       m.fail("viscoelastic", "needs \"formulation\": \"standard\"");
-    viscoelastic = read_viscoelastic(m.object("viscoelastic"));
+    into.viscoelastic = read_viscoelastic(m.object("viscoelastic"));
   }
   try {
     validate_material(out);
@@ -228,18 +246,9 @@ MaterialModel read_material(JsonObject m, Vec3& fiber_direction, VolumeFormulati
                         " Pa, bulk " + number_text(moduli.bulk()) + " Pa)");
   }
   m.finish();
-  return out;
+  into.model = out;
+  into.path = m.path();
 }
-
-// A body's materials: one for the whole body (region empty) or one per element region.
-struct BodyMaterial {
-  std::string region;
-  MaterialModel model;
-  Vec3 fiber = Vec3::UnitX();
-  VolumeFormulation formulation = VolumeFormulation::kStandard;
-  PronySeries viscoelastic;  // empty: elastic
-  std::string path;          // the scene key, for messages
-};
 
 // Reads "material" (one for the whole body) or "materials" ({region: material}); the region
 // names are checked against the mesh once it is read (region_materials_checked).
@@ -247,9 +256,7 @@ std::vector<BodyMaterial> read_body_materials(JsonObject& b) {
   std::vector<BodyMaterial> out;
   if (!b.has("materials")) {
     const JsonObject m = b.object("material");
-    BodyMaterial& one = out.emplace_back();
-    one.model = read_material(m, one.fiber, one.formulation, one.viscoelastic);
-    one.path = m.path();
+    read_material(m, out.emplace_back());
     return out;
   }
   if (b.has("material")) b.fail("materials", "give either material or materials, not both");
@@ -258,8 +265,7 @@ std::vector<BodyMaterial> read_body_materials(JsonObject& b) {
     const JsonObject m = ms.object(region);
     BodyMaterial& one = out.emplace_back();
     one.region = region;
-    one.model = read_material(m, one.fiber, one.formulation, one.viscoelastic);
-    one.path = m.path();
+    read_material(m, one);
   }
   if (out.empty()) b.fail("materials", "names no region");
   ms.finish();
@@ -455,6 +461,14 @@ void read_contact(JsonObject c, Scene& scene, const std::vector<std::string>& bo
       c.fail("exclude", "only for the material_depth model");
     scene.contact_options.excluded = read_excluded(c, bodies, scene.contact_options.self_contact);
   }
+  if (c.has("list_margin")) {
+    if (scene.contact != ContactModel::kMaterialDepth)
+      c.fail("list_margin", "only for the material_depth model");
+    scene.contact_options.list_margin = c.number("list_margin");
+    if (!(scene.contact_options.list_margin >= 0 && scene.contact_options.list_margin <= 10))
+      c.fail("list_margin", "must be between 0 and 10 mean edge lengths");
+    scene.list_margin_given = true;
+  }
   c.finish();
 }
 
@@ -625,9 +639,11 @@ void apply_paper_preset(Scene& scene) {
   // elements." The constant: measured.
   scene.quasi_viscosity = kPaperQuasiViscosity;
   // 5.5: "the tree structure is built only once at the beginning of each run. The interval
-  // values are efficiently updated in a bottom-up manner at every solution step." depthfem
-  // always does so, a run being one load increment (the paper's knee: one 3-degree interval):
-  // MaterialDepthContact::begin_step builds, prepare refits.
+  // values are efficiently updated in a bottom-up manner at every solution step." A run being
+  // one load increment (the paper's knee: one 3-degree interval), MaterialDepthContact::begin_step
+  // builds the trees; without depthfem's candidate list, prepare refits and searches them at
+  // every solution step.
+  if (!scene.list_margin_given) scene.contact_options.list_margin = 0;
 }
 
 void read_solver(JsonObject s, Scene& scene) {
@@ -949,6 +965,7 @@ void add_body(const BodySpec& b, Scene& scene, std::vector<std::string>& materia
                      .tets = {},
                      .fibers = Points(),
                      .formulation = m.formulation,
+                     .patch_size = m.patch_size,
                      .viscoelastic = m.viscoelastic};
       for (Index t = 0; t < tets.num_tets; ++t) g.tets.push_back(tets.first_tet + t);
       if (material_uses_fiber(g.material))

@@ -45,6 +45,7 @@ struct Scene {
   std::vector<Constraint> constraints;
   ContactModel contact = ContactModel::kNone;
   ContactOptions contact_options;
+  bool list_margin_given = false;  ///< the contact key list_margin (the solver preset keeps it)
   std::vector<Obstacle> obstacles;
   std::string solver_preset;       ///< the solver key "preset" ("paper"), or empty
   double quasi_viscosity = 0;      ///< [Pa]; 0: off

@@ -49,9 +49,10 @@ std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers,
                       mesh.X, mesh.tets, ranks ? own_part(scene.groups, *ranks) : scene.groups,
                       scene.elasticity),
                   Share::kOwnPart);
-  // Groups with the nodal-pressure formulation: their volume change averaged over the nodes.
-  if (auto volume = make_nodal_volume(mesh.X, mesh.tets, scene.groups))
-    model->nodal_volume = &system.add(std::move(volume));
+  // Groups with the nodal-pressure or patch-volume formulation: their volume change taken on
+  // patches of tets.
+  if (auto volume = make_patch_volume(mesh.X, mesh.tets, scene.groups))
+    model->patch_volume = &system.add(std::move(volume));
   model->lumped_mass = lumped_mass(mesh.X, mesh.tets, scene.tet_density);
   const VectorX& mass = model->lumped_mass;
   const bool time_dependent = scene.analysis != Analysis::kStatic;

@@ -6,7 +6,7 @@
 
 #include "apps/scene.hpp"
 #include "contact/material_depth_contact.hpp"
-#include "integrators/forces/nodal_volume.hpp"
+#include "integrators/forces/patch_volume.hpp"
 #include "integrators/solvers/implicit_stepper.hpp"
 #include "integrators/solvers/ranks.hpp"
 #include "integrators/solvers/step_lifecycle.hpp"
@@ -23,7 +23,7 @@ struct SceneModel {
   VectorX lumped_mass;  ///< per node [kg]
   VectorX depth;        ///< material depth per node [m]; empty without material-depth contact
   Elasticity* elasticity = nullptr;               ///< a restart restores its viscoelastic history
-  const NodalVolume* nodal_volume = nullptr;      ///< with nodal-pressure material groups
+  const PatchVolume* patch_volume = nullptr;      ///< with nodal-pressure or patch-volume groups
   const MaterialDepthContact* contact = nullptr;  ///< material-depth contact, when on
   NodalSpring* quasi_viscosity = nullptr;         ///< static analysis with quasi_viscosity > 0
   ImplicitTerms implicit;                         ///< inertia and damping of the implicit schemes

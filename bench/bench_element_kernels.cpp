@@ -451,11 +451,12 @@ void BM_PeakFlops(benchmark::State& state) {
       2.0 * 8 * kLanes * kSteps * threads, benchmark::Counter::kIsIterationInvariantRate);
 }
 
-// a = b + s c over arrays of 32 MiB each (STREAM's triad, 24 bytes per entry).
+// a = b + s c over arrays of 2^range(1) entries each (STREAM's triad, 24 bytes per entry): 2^22
+// (32 MiB) as the kernels' ceiling, 2^27 (1 GiB, beyond any last-level cache) for main memory.
 void BM_Bandwidth(benchmark::State& state) {
   const int threads = static_cast<int>(state.range(0));
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-  const size_t n = size_t(1) << 22;
+  const size_t n = size_t(1) << state.range(1);
   std::vector<double> a(n, 0.0), b(n, 1.0), c(n, 2.0);
   for (auto _ : state) {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 16),
@@ -510,8 +511,9 @@ const bool registered = [] {
       ->Arg(2)
       ->MeasureProcessCPUTime();
   benchmark::RegisterBenchmark("Ceiling/Bandwidth", BM_Bandwidth)
-      ->Arg(1)
-      ->Arg(2)
+      ->Args({1, 22})
+      ->Args({2, 22})
+      ->Args({1, 27})
       ->MeasureProcessCPUTime();
   return true;
 }();

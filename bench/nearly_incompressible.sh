@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# Cost of the nodal-pressure formulation against the standard tet on one mesh: the cantilever
-# (apps/scenes/cantilever_gravity.json) at CELLS, one thread, E = 100 MPa, as the standard tet at
-# nu = 0.3 and at nu = 0.4999 (which locks) and the nodal-pressure tet at nu = 0.4999, run
-# alternately ROUNDS times. One CSV row per run: Newton iterations, tip deflection, seconds in
+# Cost of the nodal-pressure and patch-volume formulations against the standard tet on one mesh:
+# the cantilever (apps/scenes/cantilever_gravity.json) at CELLS, one thread, E = 100 MPa, as the
+# standard tet at nu = 0.3 and at nu = 0.4999 (which locks), the nodal-pressure tet and the
+# patch-volume tet (patches of 6 tets: the hexahedra) at nu = 0.4999, run alternately ROUNDS
+# times, the load average (uptime) before each round. One CSV row per run: Newton iterations, tip deflection, seconds in
 # force/stiffness and in the linear solve (the results file's timing), and both per Newton iteration.
 #   bench/nearly_incompressible.sh [OUT.csv]   (from the repository root after building;
 #   CELLS=[80,8,8] ROUNDS=3 by default)
@@ -14,7 +15,8 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 echo "round,formulation,poisson,newton,tip_z,force_stiffness_s,linear_solve_s,force_per_newton_s,solve_per_newton_s" > "$out"
 for round in $(seq 1 "$rounds"); do
-  for case in standard:0.3 standard:0.4999 nodal_pressure:0.4999; do
+  uptime >&2
+  for case in standard:0.3 standard:0.4999 nodal_pressure:0.4999 patch_volume:0.4999; do
     formulation=${case%%:*} poisson=${case##*:}
     build/apps/depthfem run apps/scenes/cantilever_gravity.json --out "$tmp/run.h5" --threads 1 \
       --set "bodies.0.mesh.cells=$cells" --set "bodies.0.material.poisson=$poisson" \

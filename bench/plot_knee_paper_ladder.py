@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """The ladder of bench/knee_paper_ladder.sh as stacked bars, and its table.
 
-    plot_knee_paper_ladder.py LADDER.csv OUT.png
+    plot_knee_paper_ladder.py LADDER.csv OUT.png [DEGREES]   (the ladder's DEGREES, 3 by default)
 
 Left: seconds per rung (the median over the rounds of each group), stacked by the paper's three
 groups and the rest. Right: the same as shares of each rung's time, beside the paper's
@@ -23,7 +23,7 @@ PAPER = {"force_stiffness_s": 63.0, "collision_s": 22.0, "linear_solve_s": 15.0,
 COLORS = ["#4c72b0", "#dd8452", "#55a868", "#bbbbbb"]
 
 
-def main(path, out):
+def main(path, out, degrees="3"):
     rows = list(csv.DictReader(open(path)))
     rungs = sorted({int(r["rung"]) for r in rows})
     names, med = [], []
@@ -57,7 +57,7 @@ def main(path, out):
         axis.invert_yaxis()
         axis.set_xlabel("share of the time [%]" if percent else "seconds (median of the rounds)")
     left.legend(loc="lower right", fontsize=8)
-    fig.suptitle("The knee's first 3 degrees: the paper's algorithm to depthfem's default, "
+    fig.suptitle(f"The knee's first {degrees} degrees: the paper's algorithm to depthfem's default, "
                  "one change per rung")
     fig.tight_layout()
     fig.savefig(out, dpi=110)

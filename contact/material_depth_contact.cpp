@@ -49,15 +49,54 @@ MaterialDepthContact::MaterialDepthContact(const Mesh& mesh, VectorX depth, Cont
   // Sub-triangles with area below 1e-12 of a typical element face count as degenerate.
   const double h = mean_edge_length(mesh.X, mesh.tets);
   min_area2_ = std::pow(1e-12 * h * h, 2);
+  margin_ = options_.list_margin * h;
   build_trees(mesh.X);
 }
+
+namespace {
+std::span<const Box3> body_boxes(const std::vector<Box3>& boxes, const Body& b) {
+  return std::span(boxes).subspan(static_cast<size_t>(b.first_tet),
+                                  static_cast<size_t>(b.num_tets));
+}
+}  // namespace
 
 void MaterialDepthContact::build_trees(const Points& x) {
   const std::vector<Box3> boxes = tet_boxes(x, tets_);
   trees_.clear();
-  for (const Body& b : bodies_)
-    trees_.emplace_back(std::span(boxes).subspan(static_cast<size_t>(b.first_tet),
-                                                 static_cast<size_t>(b.num_tets)));
+  for (const Body& b : bodies_) trees_.emplace_back(body_boxes(boxes, b));
+}
+
+void MaterialDepthContact::list_candidates(const Points& x) {
+  const std::vector<Box3> boxes = tet_boxes(x, tets_);
+  for (size_t b = 0; b < bodies_.size(); ++b) trees_[b].refit(body_boxes(boxes, bodies_[b]));
+  const Index n = static_cast<Index>(tris_.rows());
+  const Index chunks = (n + kChunk - 1) / kChunk;
+  std::vector<std::vector<Index>> tets(static_cast<size_t>(chunks));
+  listed_start_.assign(static_cast<size_t>(n) + 1, 0);
+  // Boxes grown by the margin each overlap where the triangle's, grown by twice it, overlaps.
+  const std::vector<Box3> tri_boxes = triangle_boxes(x, tris_, 2 * margin_);
+  tbb::parallel_for(Index(0), chunks, [&](Index c) {
+    for (Index f = c * kChunk; f < std::min(n, (c + 1) * kChunk); ++f) {
+      const Index body = tri_body_(f);
+      for (Index other = 0; other < static_cast<Index>(bodies_.size()); ++other) {
+        if (!searched(body, other)) continue;
+        trees_[other].query(tri_boxes[f], [&](Index local) {
+          const Index t = bodies_[other].first_tet + local;
+          if (other == body)
+            for (int a = 0; a < 4; ++a)
+              for (int b = 0; b < 3; ++b)
+                if (tets_(t, a) == tris_(f, b)) return;  // shares a node: never in contact
+          tets[c].push_back(t);
+          ++listed_start_[f + 1];
+        });
+      }
+    }
+  });
+  std::partial_sum(listed_start_.begin(), listed_start_.end(), listed_start_.begin());
+  listed_tets_.clear();
+  for (const std::vector<Index>& chunk : tets)
+    listed_tets_.insert(listed_tets_.end(), chunk.begin(), chunk.end());
+  listed_x_ = x;
 }
 
 bool MaterialDepthContact::searched(Index a, Index b) const {
@@ -74,13 +113,14 @@ std::array<Index, 7> MaterialDepthContact::pair_nodes(const ContactPair& p) cons
 
 void MaterialDepthContact::begin_step(const Points& x) {
   build_trees(x);
+  listed_x_.resize(0, 3);
 }
 
 void MaterialDepthContact::prepare(const Points& x) {
+  const bool relist = listed_x_.rows() == 0 ||
+                      (x - listed_x_).rowwise().squaredNorm().maxCoeff() > margin_ * margin_;
+  if (relist) list_candidates(x);
   const std::vector<Box3> boxes = tet_boxes(x, tets_);
-  for (size_t b = 0; b < bodies_.size(); ++b)
-    trees_[b].refit(std::span(boxes).subspan(static_cast<size_t>(bodies_[b].first_tet),
-                                             static_cast<size_t>(bodies_[b].num_tets)));
   const Index n = static_cast<Index>(tris_.rows());
   const Index chunks = (n + kChunk - 1) / kChunk;
   std::vector<std::vector<ContactPair>> found(static_cast<size_t>(chunks));
@@ -90,24 +130,19 @@ void MaterialDepthContact::prepare(const Points& x) {
       const std::array<Vec3, 3> Q = tri_corners(x, tris_, f);
       Box3 box;
       for (const Vec3& q : Q) box.extend(q);
-      const Index body = tri_body_(f);
-      for (Index other = 0; other < static_cast<Index>(bodies_.size()); ++other) {
-        if (!searched(body, other)) continue;
-        trees_[other].query(box, [&](Index local) {
-          const Index t = bodies_[other].first_tet + local;
-          if (other == body)
-            for (int a = 0; a < 4; ++a)
-              for (int b = 0; b < 3; ++b)
-                if (tets_(t, a) == tris_(f, b)) return;  // shares a node: never in contact
-          ++candidates[c];
-          ClipPolygon poly = clip_triangle_by_tet(tet_corners(x, tets_, t), Q);
-          if (poly.size >= 3 && has_area(poly, min_area2_)) found[c].push_back({f, t, poly});
-        });
+      for (Index k = listed_start_[f]; k < listed_start_[f + 1]; ++k) {
+        const Index t = listed_tets_[k];
+        if (!boxes[t].intersects(box)) continue;
+        ++candidates[c];
+        ClipPolygon poly = clip_triangle_by_tet(tet_corners(x, tets_, t), Q);
+        if (poly.size >= 3 && has_area(poly, min_area2_)) found[c].push_back({f, t, poly});
       }
     }
   });
   std::vector<ContactPair> all;
   stats_ = ContactStats{};
+  stats_.listed = static_cast<Index>(listed_tets_.size());
+  stats_.relisted = relist;
   for (Index c = 0; c < chunks; ++c) {
     all.insert(all.end(), found[c].begin(), found[c].end());
     stats_.candidates += candidates[c];

@@ -25,6 +25,9 @@ struct ContactOptions {
   /// conditions hold together, such as a tissue attached to a bone, whose coinciding surfaces
   /// only touch. Their report rows stay, at zero.
   std::vector<std::array<Index, 2>> excluded = {};
+  /// The candidate list's margin per mean edge length (bench/results/knee.md, third round); 0
+  /// searches the refitted trees at every prepare() where a node has moved.
+  double list_margin = 0.1;
 };
 
 /// A boundary triangle cutting a tet, with the polygon they share.
@@ -35,14 +38,20 @@ struct ContactPair {
 
 /// How many pairs the last prepare() examined and kept.
 struct ContactStats {
-  Index candidates = 0;  ///< triangle-tet pairs whose boxes overlap
-  Index active = 0;      ///< pairs with an intersection polygon of non-zero area
+  Index candidates = 0;   ///< triangle-tet pairs whose boxes overlap
+  Index active = 0;       ///< pairs with an intersection polygon of non-zero area
+  Index listed = 0;       ///< pairs on the candidate list (boxes within twice the list margin)
+  bool relisted = false;  ///< whether this prepare() searched the trees for a new list
 };
 
 /// The contact force module. Geometry (tree, clipping, depth lookup) lives in aabb_tree, clip
 /// and material_depth; this class pairs elements and integrates the penalty (penalty.hpp).
-/// Pair search and integration run in parallel. prepare() orders the pairs (PairSchedule) and
-/// finds their 49 Hessian blocks each in the bound pattern; evaluate() adds each pair's
+/// Pair search and integration run in parallel. The trees are searched for a candidate list,
+/// each triangle's tets whose boxes come within twice a margin of its box; prepare() tests only
+/// the listed pairs' boxes and searches the trees again only when some node has moved farther
+/// than the margin since the list was made (or at begin_step): the pairs are those a search
+/// of the trees at every call finds, in the same order. prepare() orders the pairs (PairSchedule)
+/// and finds their 49 Hessian blocks each in the bound pattern; evaluate() adds each pair's
 /// derivatives as it computes them, chunks of a color concurrently, without searching or
 /// allocating. Every block and gradient entry receives its terms in pair order, whatever the
 /// number of threads.
@@ -74,6 +83,8 @@ class MaterialDepthContact final : public ForceModule {
   /// The active pairs of the last prepare(), in processing order.
   const std::vector<ContactPair>& pairs() const { return pairs_; }
   ContactStats stats() const { return stats_; }
+  /// [m] how far a node may move from where the candidate list was made before it is made anew.
+  double list_margin() const { return margin_; }
 
   /// Energy of one pair (returned), its gradient (21) and, where `hessian` is not null, its
   /// Hessian (21 x 21); variables: tet corners 0..11, triangle corners 12..20.
@@ -93,11 +104,16 @@ class MaterialDepthContact final : public ForceModule {
   double min_area2_ = 0;
   /// Builds trees_ over the tets of each body at positions x.
   void build_trees(const Points& x);
+  /// Refits trees_ at positions x and lists every triangle's candidate tets.
+  void list_candidates(const Points& x);
   /// Whether triangles of body a are searched against tets of body b.
   bool searched(Index a, Index b) const;
 
   std::vector<Body> bodies_;
   std::vector<AabbTree> trees_;  // per body over its tets (primitive k: tet first_tet + k)
+  double margin_ = 0;            // [m] a node may move this far before the list is made anew
+  Points listed_x_;              // positions at which the list was made (empty: none yet)
+  std::vector<Index> listed_start_, listed_tets_;  // per triangle (CSR): its candidate tets
   std::vector<ContactPair> pairs_;
   PairSchedule schedule_;  // of pairs_: tet corners, triangle corners
   ContactStats stats_;

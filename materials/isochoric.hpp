@@ -2,7 +2,7 @@
 /// The isochoric part of any material written in invariants: its derivatives
 /// (isochoric_derivatives, which the viscoelastic split of materials/viscoelastic.hpp scales) and
 /// the model Isochoric<M> for formulations that treat the volume change apart
-/// (integrators/forces/nodal_volume.hpp).
+/// (integrators/forces/patch_volume.hpp).
 
 #include <array>
 #include <cmath>

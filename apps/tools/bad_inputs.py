@@ -298,6 +298,14 @@ def cases(exe):
                        ("poisson 0.5 with nodal pressure",
                         lambda s: (nh(1e6, 0.5)(s), setter(material + ["formulation"],
                                                            "nodal_pressure")(s))),
+                       ("patch size 0",
+                        lambda s: (setter(material + ["formulation"], "patch_volume")(s),
+                                   setter(material + ["patch_size"], 0)(s))),
+                       ("patch size 2.5",
+                        lambda s: (setter(material + ["formulation"], "patch_volume")(s),
+                                   setter(material + ["patch_size"], 2.5)(s))),
+                       ("patch size without the patch-volume formulation",
+                        setter(material + ["patch_size"], 6)),
                        ("box hi = lo", setter(["bodies", 0, "mesh", "hi"], [0, 0, 0])),
                        ("box hi below lo", setter(["bodies", 0, "mesh", "hi"], [-1, 1, 1])),
                        ("gravity infinite", setter(["gravity"], [0, 0, 1e400])),
@@ -368,7 +376,9 @@ def cases(exe):
                        ("negative penalty", setter(["contact"], {"model": "material_depth",
                                                                  "penalty": -1})),
                        ("unknown excluded interface", setter(["contact"], {
-                           "model": "material_depth", "penalty": 1e6, "exclude": ["bar/floor"]}))]:
+                           "model": "material_depth", "penalty": 1e6, "exclude": ["bar/floor"]})),
+                       ("negative list margin", setter(["contact"], {
+                           "model": "material_depth", "penalty": 1e6, "list_margin": -0.1}))]:
         add("boundary and contact", name, {"scene.json": scene(edit)})
 
     # Mesh files: Gmsh.

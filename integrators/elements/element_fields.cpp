@@ -34,7 +34,7 @@ Eigen::Matrix<double, 1, 6> voigt(const Mat3& S) {
 
 ElementFields element_fields(const Points& X, const TetIndices& tets,
                              const std::vector<ElasticGroup>& groups, const Points& x,
-                             ElementFieldOptions options, const VectorX* nodal_pressure) {
+                             ElementFieldOptions options, const VectorX* tet_pressure) {
   const Index n = static_cast<Index>(tets.rows());
   ElementFields out;
   if (options.strain) {
@@ -55,20 +55,18 @@ ElementFields element_fields(const Points& X, const TetIndices& tets,
     out.von_mises = VectorX::Zero(n);
     for (const ElasticGroup& group : groups) {
       const Index size = static_cast<Index>(group.tets.size());
-      const bool nodal = group.formulation == VolumeFormulation::kNodalPressure;
-      if (nodal && !nodal_pressure)
-        throw std::logic_error("element fields: a nodal-pressure group needs the nodal pressures");
+      const bool split = group.formulation != VolumeFormulation::kStandard;
+      if (split && !tet_pressure)
+        throw std::logic_error(
+            "element fields: a nodal-pressure or patch-volume group needs the "
+            "pressures of its tets");
       const auto stresses = [&](const auto& material) {
         tbb::parallel_for(Index(0), size, [&](Index k) {
           const Index t = group.tets[static_cast<size_t>(k)];
           const Mat3 F = deformation_gradient(X, x, tets, t);
           const Vec3 f = group.fibers.rows() ? Vec3(group.fibers.row(k)) : Vec3::UnitX();
           Mat3 sigma = first_piola(material, F, f) * F.transpose() / F.determinant();
-          if (nodal) {
-            double p = 0;
-            for (int c = 0; c < 4; ++c) p += 0.25 * (*nodal_pressure)[tets(t, c)];
-            sigma.diagonal().array() += p;
-          }
+          if (split) sigma.diagonal().array() += (*tet_pressure)[t];
           const Mat3 s = sigma - sigma.trace() / 3 * Mat3::Identity();
           out.stress.row(t) = voigt(sigma);
           out.von_mises(t) = std::sqrt(1.5 * s.cwiseAbs2().sum());
@@ -76,7 +74,7 @@ ElementFields element_fields(const Points& X, const TetIndices& tets,
       };
       std::visit(
           [&]<class M>(const M& material) {
-            if (nodal) return stresses(Isochoric<M>{material});
+            if (split) return stresses(Isochoric<M>{material});
             stresses(material);
           },
           group.material);

@@ -19,12 +19,12 @@ struct ElementFieldOptions {
 ///   Cauchy stress sigma = P F^T / J, P = dpsi/dF of the tet's material in `groups` (zero for a
 ///   tet in no group: a rigid body); von Mises sqrt(3/2 s : s), s = sigma - tr(sigma)/3 I;
 ///   logarithmic (Hencky) strain ln V = 1/2 ln(F F^T), in the current frame like sigma.
-/// A tet of a group with VolumeFormulation::kNodalPressure takes the stress of that formulation:
-/// the isochoric part's P F^T / J plus the mean of its four nodes' pressures times I, read from
-/// `nodal_pressure` (#nodes [Pa], NodalVolume::nodal_pressures), which such a group needs.
+/// A tet of a group with VolumeFormulation::kNodalPressure or kPatchVolume takes the stress of
+/// that formulation: the isochoric part's P F^T / J plus its pressure times I, read from
+/// `tet_pressure` (#tets [Pa], PatchVolume::tet_pressures), which such a group needs.
 /// Arrays not asked for stay empty. Requires J > 0 for every tet (a converged state).
 ElementFields element_fields(const Points& X, const TetIndices& tets,
                              const std::vector<ElasticGroup>& groups, const Points& x,
-                             ElementFieldOptions options, const VectorX* nodal_pressure = nullptr);
+                             ElementFieldOptions options, const VectorX* tet_pressure = nullptr);
 
 }  // namespace depthfem

@@ -271,13 +271,12 @@ double Elasticity::evaluate(const Points& x, VectorX* gradient, BlockSparseMatri
         return run_group<1>(m, grp.block, nullptr, x, gradient, nullptr, false, history);
       return run_group<0>(m, grp.block, nullptr, x, nullptr, nullptr, false, history);
     };
-    // The group's model: the isochoric part alone (nodal pressure; never viscoelastic, see the
-    // constructor), the material with its isochoric part scaled as the viscoelastic history says
-    // (materials/viscoelastic.hpp), or the material as given.
+    // The group's model: the isochoric part alone (nodal pressure or patch volume; never
+    // viscoelastic, see the constructor), the material with its isochoric part scaled as the
+    // viscoelastic history says (materials/viscoelastic.hpp), or the material as given.
     total += std::visit(
         [&]<class M>(const M& m) {
-          if (grp.formulation == VolumeFormulation::kNodalPressure)
-            return run(Isochoric<M>{m}, nullptr);
+          if (grp.formulation != VolumeFormulation::kStandard) return run(Isochoric<M>{m}, nullptr);
           if (grp.history)
             return run(IsochoricScaled<M>{m, grp.history->isochoric_scale()}, &*grp.history);
           return run(m, nullptr);

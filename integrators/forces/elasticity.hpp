@@ -15,8 +15,13 @@ namespace depthfem {
 enum class VolumeFormulation {
   kStandard,  ///< psi(F) of each tet, the material as given (locks as nu -> 0.5)
   /// psi(J^-1/3 F) of each tet (materials/isochoric.hpp); the volume change is averaged over the
-  /// nodes by a NodalVolume module (nodal_volume.hpp), which the owner adds for these tets
+  /// nodes by a PatchVolume module (patch_volume.hpp: node_patches), which the owner adds for
+  /// these tets
   kNodalPressure,
+  /// psi(J^-1/3 F) of each tet; the volume change is taken on disjoint patches of about
+  /// ElasticGroup::patch_size face-adjacent tets (F-bar in its energy form) by a PatchVolume
+  /// module (patch_volume.hpp: element_patches), which the owner adds for these tets
+  kPatchVolume,
 };
 
 /// Tets sharing one material model; `fibers` has a direction per tet when the model needs one.
@@ -25,6 +30,8 @@ struct ElasticGroup {
   std::vector<Index> tets;  ///< global tet ids
   Points fibers;            ///< #tets x 3 or empty
   VolumeFormulation formulation = VolumeFormulation::kStandard;
+  /// With kPatchVolume: the target number of tets per patch (element_patches in patch_volume.hpp)
+  int patch_size = 6;
   /// Relaxation of the isochoric stress (materials/viscoelastic.hpp); empty: elastic. Only with
   /// the standard formulation.
   PronySeries viscoelastic = {};

@@ -128,12 +128,14 @@ TEST(KneeScene, PaperVariantIsTheKneeUnderThePaperPreset) {
   EXPECT_TRUE(p.predictor);
   EXPECT_FALSE(p.linearised_start);
   EXPECT_EQ(paper.quasi_viscosity, 300.0);
+  EXPECT_EQ(paper.contact_options.list_margin, 0.0);
   // depthfem's defaults, which the preset changes.
   EXPECT_EQ(k.newton.line_search, LineSearchRule::kEnergy);
   EXPECT_FALSE(k.newton.full_step_first);
   EXPECT_TRUE(k.newton.gradient_fallback);
   EXPECT_TRUE(k.linearised_start);
   EXPECT_EQ(knee.quasi_viscosity, 0.0);
+  EXPECT_GT(knee.contact_options.list_margin, 0.0);
 }
 
 // Keys beside the preset override it, each on its own; the others keep the preset's value.

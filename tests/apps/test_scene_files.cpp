@@ -218,7 +218,29 @@ TEST_F(SceneFileTest, FormulationChoosesHowTetsTakeTheVolumeChange) {
   EXPECT_EQ(load_scene(write(kValid)).groups.at(0).formulation, VolumeFormulation::kStandard);
   EXPECT_NE(error(kValid, {parse_override("bodies.0.material.formulation=mixed")})
                 .find("bodies[0].material.formulation: unknown formulation 'mixed' (expected "
-                      "standard or nodal_pressure)"),
+                      "standard, nodal_pressure or patch_volume)"),
+            std::string::npos);
+  // The patch-volume formulation and its patch size (default 6: the hexahedra of a box mesh).
+  const Scene patch =
+      load_scene(write(kValid), {parse_override("bodies.0.material=" + nh),
+                                 parse_override("bodies.0.material.formulation=patch_volume"),
+                                 parse_override("bodies.0.material.patch_size=8")});
+  EXPECT_EQ(patch.groups.at(0).formulation, VolumeFormulation::kPatchVolume);
+  EXPECT_EQ(patch.groups.at(0).patch_size, 8);
+  EXPECT_EQ(
+      load_scene(write(kValid), {parse_override("bodies.0.material=" + nh),
+                                 parse_override("bodies.0.material.formulation=patch_volume")})
+          .groups.at(0)
+          .patch_size,
+      6);
+  EXPECT_NE(error(kValid, {parse_override("bodies.0.material=" + nh),
+                           parse_override("bodies.0.material.formulation=patch_volume"),
+                           parse_override("bodies.0.material.patch_size=0")})
+                .find("bodies[0].material.patch_size: must be >= 1 (tets per patch)"),
+            std::string::npos);
+  EXPECT_NE(error(kValid, {parse_override("bodies.0.material=" + nh),
+                           parse_override("bodies.0.material.patch_size=6")})
+                .find("bodies[0].material.patch_size: needs \"formulation\": \"patch_volume\""),
             std::string::npos);
   EXPECT_NE(error(kValid, {parse_override(R"(bodies.0.material={"model": "neo_hookean",
                                              "youngs": 3e4, "poisson": 0.5,

@@ -4,8 +4,10 @@
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 
+#include <cmath>
 #include <random>
 #include <set>
+#include <tuple>
 
 #include "contact/material_depth.hpp"
 #include "contact/material_depth_contact.hpp"
@@ -182,6 +184,49 @@ TEST(MaterialDepthContact, ExcludedInterfacesAreNotSearched) {
   EXPECT_GT(excluded, 10) << "the excluded interfaces must have pairs";
   EXPECT_GT(expected.size(), 10u);
   EXPECT_EQ(searched, expected);
+}
+
+// The candidate list: after moves within its margin the module keeps its list, after a larger
+// one it searches the trees again, and either way it finds the pairs, polygons and order that a
+// module searching its trees at those positions finds.
+TEST(MaterialDepthContact, TheCandidateListFindsWhatASearchAtThePositionsFinds) {
+  const Mesh m = three_boxes();
+  MaterialDepthContact kept(m, material_depth(m), {.penalty = 1e5});
+  kept.begin_step(m.X);
+  kept.prepare(m.X);
+  ASSERT_TRUE(kept.stats().relisted);
+  const double margin = kept.list_margin();
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const auto moved = [&](const Points& from, double per_axis) {
+    Points y = from;
+    for (Index i = 0; i < y.size(); ++i) y.data()[i] += per_axis * u(rng);
+    return y;
+  };
+  // Each move is measured from where the list was made: within the margin (a node moves at
+  // most sqrt(3) per_axis), then beyond it, then within it again from there.
+  const Points far = moved(m.X, 3 * margin);
+  const std::vector<std::pair<Points, bool>> moves = {
+      {moved(m.X, 0.5 * margin / std::sqrt(3.0)), false},
+      {moved(m.X, 0.9 * margin / std::sqrt(3.0)), false},
+      {far, true},
+      {moved(far, 0.9 * margin / std::sqrt(3.0)), false}};
+  Index compared = 0;
+  for (const auto& [x, relisted] : moves) {
+    kept.prepare(x);
+    EXPECT_EQ(kept.stats().relisted, relisted);
+    MaterialDepthContact fresh(m, material_depth(m), {.penalty = 1e5});
+    fresh.prepare(x);
+    ASSERT_EQ(kept.pairs().size(), fresh.pairs().size());
+    EXPECT_EQ(kept.stats().candidates, fresh.stats().candidates);
+    for (size_t k = 0; k < fresh.pairs().size(); ++k) {
+      const ContactPair &a = kept.pairs()[k], &b = fresh.pairs()[k];
+      ASSERT_EQ(std::tie(a.tri, a.tet, a.polygon.size), std::tie(b.tri, b.tet, b.polygon.size));
+      for (int v = 0; v < a.polygon.size; ++v) EXPECT_EQ(a.polygon.x[v], b.polygon.x[v]);
+    }
+    compared += static_cast<Index>(fresh.pairs().size());
+  }
+  EXPECT_GT(compared, 100) << "the boxes must overlap";
 }
 
 // Energy, gradient and Hessian of a module at x on `threads` threads, into a matrix bound to it.
