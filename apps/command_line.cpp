@@ -1,6 +1,9 @@
 #include "apps/command_line.hpp"
 
+#include <tbb/info.h>
 #include <CLI/CLI.hpp>
+
+#include <algorithm>
 #include <charconv>
 #include <cstdio>
 #include <exception>
@@ -11,6 +14,7 @@
 #include "apps/run_scene.hpp"
 #include "core/error.hpp"
 #include "core/results_file.hpp"
+#include "integrators/solvers/ranks.hpp"
 #include "integrators/solvers/thread_budget.hpp"
 
 namespace depthfem {
@@ -164,13 +168,35 @@ int int_at_least(const std::string& option, const std::string& text, int least) 
   return value;
 }
 
-int run(const CLI::App& command, const Arguments& a, std::ostream& out, std::ostream& err,
+// Under mpirun every rank reads the same input and meets the same errors before the ranks start
+// working together: rank 0 alone reports them. An error once they have started is this rank's
+// alone (the others would wait for it forever): it is reported with the rank, and the whole run
+// ends (Ranks::abort_run); rank 0's results file keeps the steps completed before.
+int report_error(std::ostream& err, const std::string& message, int code) {
+  if (Ranks::running()) {
+    err << "depthfem: error: rank " << Ranks::launched_rank() << ": " << one_line(message)
+        << std::endl;
+    Ranks::abort_run(code);
+  }
+  if (Ranks::launched_rank() == 0) err << "depthfem: error: " << one_line(message) << "\n";
+  return code;
+}
+
+int run(const CLI::App& command, const Arguments& a, std::ostream& all_out, std::ostream& all_err,
         CommandStage stage) {
   refuse_extras_and_empty_values(command);
+  // A distributed run prints from rank 0 only.
+  std::ostream silent(nullptr);
+  std::ostream& out = Ranks::launched_rank() == 0 ? all_out : silent;
+  std::ostream& err = Ranks::launched_rank() == 0 ? all_err : silent;
   RunOptions options;
   options.out = a.out;
   options.restart = a.restart;
-  if (command.count("--threads") > 0) options.threads = int_at_least("--threads", a.threads, 1);
+  if (command.count("--threads") > 0) {
+    options.threads = int_at_least("--threads", a.threads, 1);
+  } else if (Ranks::launched() > 1) {  // the cores shared among the ranks of this machine
+    options.threads = std::max(1, tbb::info::default_concurrency() / Ranks::launched());
+  }
   if (command.count("--step") > 0) options.restart_step = int_at_least("--step", a.step, 0);
   std::vector<Override> overrides;
   for (const std::string& set : a.sets) {
@@ -261,14 +287,13 @@ int command_line(const std::vector<std::string>& args, std::ostream& out, std::o
     if (app.got_subcommand("info")) return info(*app.get_subcommand("info"), a.results, out, stage);
     throw UsageError("a command is needed: run or info");
   } catch (const UsageError& e) {
-    err << "depthfem: error: " << one_line(e.what()) << "\n" << kCommandLineUsage;
-    return 2;
+    const int code = report_error(err, e.what(), 2);
+    if (Ranks::launched_rank() == 0) err << kCommandLineUsage;
+    return code;
   } catch (const std::bad_alloc&) {
-    err << "depthfem: error: out of memory\n";
-    return 1;
+    return report_error(err, "out of memory", 1);
   } catch (const std::exception& e) {
-    err << "depthfem: error: " << one_line(e.what()) << "\n";
-    return 1;
+    return report_error(err, e.what(), 1);
   }
 }
 

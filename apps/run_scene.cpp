@@ -131,9 +131,10 @@ void refuse_overwriting_inputs(const std::string& out, const std::vector<std::st
 
 // The modules the scene asks for; errors the scene reader could not see (a conflict found by a
 // module) name the scene.
-std::unique_ptr<SceneModel> build_scene_model(const Scene& scene, PhaseTimers& timers) {
+std::unique_ptr<SceneModel> build_scene_model(const Scene& scene, PhaseTimers& timers,
+                                              Ranks* ranks) {
   try {
-    return build_model(scene, timers);
+    return build_model(scene, timers, ranks);
   } catch (const InputError& e) {
     throw InputError(scene.file + ": " + e.what());
   }
@@ -141,7 +142,7 @@ std::unique_ptr<SceneModel> build_scene_model(const Scene& scene, PhaseTimers& t
 
 // The results file of the run (none without --out), refusing to overwrite an input.
 std::unique_ptr<ResultsFile> open_results(const Scene& scene, const RunOptions& options,
-                                          const SceneModel& model, int threads) {
+                                          const SceneModel& model, int threads, int ranks) {
   if (options.out.empty()) return nullptr;
   std::vector<std::string> inputs = scene.inputs;
   if (!options.restart.empty()) inputs.push_back(options.restart);
@@ -158,7 +159,8 @@ std::unique_ptr<ResultsFile> open_results(const Scene& scene, const RunOptions& 
                .region_materials = std::move(materials.regions),
                .fields = fields,
                .initial_velocity = fields.velocity ? scene.initial_velocity : Points(),
-               .restart = restart_layout(scene, model)};
+               .restart = restart_layout(scene, model),
+               .ranks = ranks};
   for (const Constraint& c : scene.constraints) info.constraint_names.push_back(c.name);
   return std::make_unique<ResultsFile>(options.out, scene.mesh, model.depth, info);
 }
@@ -209,8 +211,24 @@ void drive(const Scene& scene, SceneModel& model, StepLifecycle& lifecycle, Star
   } catch (const InputError& e) {  // a step the results file refused, a stepper's input check
     result.message = e.what();
   } catch (const std::bad_alloc&) {
+    if (Ranks::running()) throw;  // this rank alone: the run ends at once (command_line)
     result.message = "out of memory";
   }
+}
+
+// The processes of a distributed run (mpirun -n N, N > 1), its tets partitioned among them, or
+// null for a serial run. Refuses what does not run distributed yet.
+std::unique_ptr<Ranks> start_ranks(const Scene& scene, PhaseTimers& timers) {
+  if (Ranks::launched() == 1) return nullptr;
+  if (scene.analysis != Analysis::kStatic) {
+    throw InputError(scene.file + ": a run on " + std::to_string(Ranks::launched()) +
+                     " processes (mpirun) takes static analyses only so far; this scene's is " +
+                     to_string(scene.analysis) + ": run it without mpirun");
+  }
+  auto ranks = std::make_unique<Ranks>();
+  PhaseTimers::Scope t(timers, "partition");
+  ranks->partition(scene.mesh.tets, scene.mesh.num_nodes());
+  return ranks;
 }
 
 // Writes the timing and the outcome. A file that can no longer grow (a full disk, a file-size
@@ -325,20 +343,29 @@ Start starting_state(const Scene& scene, SceneModel& model, const RunOptions& op
 
 }  // namespace
 
-RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream& log) {
+RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream& log_stream) {
   const ThreadBudget budget(options.threads);
   const int threads = budget.threads();
   const auto start = std::chrono::steady_clock::now();
   RunResult result;
-  const std::unique_ptr<SceneModel> model = build_scene_model(scene, result.timers);
+  const std::unique_ptr<Ranks> ranks = start_ranks(scene, result.timers);
+  const int num_ranks = ranks ? ranks->size() : 1;
+  // A distributed run: rank 0 alone prints and writes the results file.
+  const bool writer = !ranks || ranks->rank() == 0;
+  std::ostream silent(nullptr);
+  std::ostream& log = writer ? log_stream : silent;
+  const std::unique_ptr<SceneModel> model = build_scene_model(scene, result.timers, ranks.get());
   const Mesh& mesh = scene.mesh;
   const Start from = starting_state(scene, *model, options, log, result.x);
-  const std::unique_ptr<ResultsFile> file = open_results(scene, options, *model, threads);
+  const std::unique_ptr<ResultsFile> file =
+      writer ? open_results(scene, options, *model, threads, num_ranks) : nullptr;
   const ResultFields fields = result_fields(scene);
   log << "scene " << scene.name << ": " << mesh.num_nodes() << " nodes, " << mesh.num_tets()
-      << " tets, " << mesh.bodies.size() << " bodies, " << threads << " threads, linear solver "
-      << to_string(model->static_options.newton.linear.kind) << ", Newton tolerance "
-      << format("%.3g", scene.tolerance) << " x E h^2 per dof" << std::endl;
+      << " tets, " << mesh.bodies.size() << " bodies, "
+      << (ranks ? std::to_string(num_ranks) + " ranks of " : "") << threads
+      << " threads, linear solver " << to_string(model->static_options.newton.linear.kind)
+      << ", Newton tolerance " << format("%.3g", scene.tolerance) << " x E h^2 per dof"
+      << std::endl;
   if (!scene.solver_preset.empty()) log << solver_summary(scene) << std::endl;
 
   // Writes a completed step into the results file, with the restart record of the model's
@@ -383,8 +410,18 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
       PhaseTimers::Scope t(result.timers, "output: penetration");
       step.penetration = deepest_penetration(mesh, x, model->contact->pairs());
     }
-    if (file && (step.index + 1) % scene.output_every == 0) {
-      write(step, x, v);
+    if (!options.out.empty() && (step.index + 1) % scene.output_every == 0) {
+      // In a distributed run every rank learns whether rank 0 could write the step, so that
+      // all stop together.
+      std::string failure;
+      try {
+        if (file) write(step, x, v);
+      } catch (const InputError& e) {
+        if (!ranks) throw;
+        failure = e.what();
+      }
+      if (ranks && ranks->sum(failure.empty() ? 0.0 : 1.0) > 0)
+        throw InputError(failure.empty() ? "rank 0 could not write the results file" : failure);
       pending.reset();
     } else if (file) {
       pending = Pending{step, x, v ? *v : Points(), v != nullptr};

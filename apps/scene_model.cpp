@@ -20,12 +20,35 @@ LifecycleTerms SceneModel::lifecycle_terms() const {
   return terms;
 }
 
-std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers) {
+namespace {
+
+// The tets of each group that this rank owns, with their fiber directions (a group may be left
+// empty; it still validates its material).
+std::vector<ElasticGroup> own_part(std::vector<ElasticGroup> groups, const Ranks& ranks) {
+  for (ElasticGroup& g : groups) {
+    std::vector<Index> rows;
+    for (size_t k = 0; k < g.tets.size(); ++k)
+      if (ranks.owns_tet(g.tets[k])) rows.push_back(static_cast<Index>(k));
+    std::vector<Index> tets;
+    for (const Index k : rows) tets.push_back(g.tets[static_cast<size_t>(k)]);
+    if (g.fibers.rows() > 0) g.fibers = Points(g.fibers(rows, Eigen::all));
+    g.tets = std::move(tets);
+  }
+  return groups;
+}
+
+}  // namespace
+
+std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers, Ranks* ranks) {
   const Mesh& mesh = scene.mesh;
   auto model = std::make_unique<SceneModel>(mesh.num_nodes(), timers);
   System& system = model->system;
+  system.distribute(ranks);
   model->elasticity =
-      &system.add(std::make_unique<Elasticity>(mesh.X, mesh.tets, scene.groups, scene.elasticity));
+      &system.add(std::make_unique<Elasticity>(
+                      mesh.X, mesh.tets, ranks ? own_part(scene.groups, *ranks) : scene.groups,
+                      scene.elasticity),
+                  Share::kOwnPart);
   // Groups with the nodal-pressure or patch-volume formulation: their volume change taken on
   // patches of tets.
   if (auto volume = make_patch_volume(mesh.X, mesh.tets, scene.groups))
@@ -72,8 +95,15 @@ std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers)
       PhaseTimers::Scope t(timers, "collision detection: material depth");
       model->depth = material_depth(mesh);
     }
-    model->contact = &system.add(
-        std::make_unique<MaterialDepthContact>(mesh, model->depth, scene.contact_options));
+    auto contact =
+        std::make_unique<MaterialDepthContact>(mesh, model->depth, scene.contact_options);
+    if (ranks) {
+      std::vector<char> owned(static_cast<size_t>(mesh.num_tets()));
+      for (Index t = 0; t < mesh.num_tets(); ++t)
+        owned[static_cast<size_t>(t)] = ranks->owns_tet(t);
+      contact->set_owned_tets(std::move(owned));
+    }
+    model->contact = &system.add(std::move(contact), Share::kOwnPart);
   } else if (scene.contact == ContactModel::kNodeToSurface) {
     system.add(std::make_unique<NodeToSurfaceContact>(mesh, scene.contact_options.penalty));
   }

@@ -8,6 +8,7 @@
 #include "contact/material_depth_contact.hpp"
 #include "integrators/forces/patch_volume.hpp"
 #include "integrators/solvers/implicit_stepper.hpp"
+#include "integrators/solvers/ranks.hpp"
 #include "integrators/solvers/step_lifecycle.hpp"
 
 namespace depthfem {
@@ -37,7 +38,10 @@ struct SceneModel {
 };
 
 /// Builds the modules `scene` asks for (and nothing else). Material depth is computed here
-/// (timed as collision detection). Throws InputError for inconsistent input.
-std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers);
+/// (timed as collision detection). Throws InputError for inconsistent input. With `ranks`
+/// (partitioned), a distributed model: elasticity and material-depth contact evaluate this
+/// rank's tets and their pairs, every other module is evaluated whole by rank 0 (System, Share).
+std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers,
+                                        Ranks* ranks = nullptr);
 
 }  // namespace depthfem

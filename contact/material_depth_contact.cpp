@@ -199,11 +199,18 @@ double MaterialDepthContact::pair_derivatives(const Points& x, const ContactPair
 
 double MaterialDepthContact::evaluate(const Points& x, VectorX* gradient,
                                       BlockSparseMatrix* hessian) const {
-  if (!gradient) return schedule_.run(0.0, [&](Index k) { return pair_energy(x, pairs_[k]); });
+  const auto skipped = [&](Index k) {
+    return !owned_.empty() && !owned_[static_cast<size_t>(pairs_[k].tet)];
+  };
+  if (!gradient) {
+    return schedule_.run(0.0,
+                         [&](Index k) { return skipped(k) ? 0.0 : pair_energy(x, pairs_[k]); });
+  }
   if (hessian && !schedule_.has_blocks())
     throw std::logic_error("contact: bind() the Hessian after prepare() found new pairs");
   // Each pair's derivatives are added as soon as they are computed.
   return schedule_.run(0.0, [&](Index k) {
+    if (skipped(k)) return 0.0;
     PairGradient grad;
     PairHessian hess;
     const double energy = pair_derivatives(x, pairs_[k], grad, hessian ? &hess : nullptr);

@@ -76,6 +76,10 @@ class MaterialDepthContact final : public ForceModule {
   void report(const Points& x, StepRecord& step) const override;
   std::vector<std::string> interface_names() const override { return interfaces_.names(); }
 
+  /// In a distributed run: evaluate() integrates only the pairs of the tets marked 1 (#tets;
+  /// this rank's), while the pair search stays whole on every rank (pairs(), report()).
+  void set_owned_tets(std::vector<char> owned) { owned_ = std::move(owned); }
+
   /// The active pairs of the last prepare(), in processing order.
   const std::vector<ContactPair>& pairs() const { return pairs_; }
   ContactStats stats() const { return stats_; }
@@ -114,6 +118,7 @@ class MaterialDepthContact final : public ForceModule {
   PairSchedule schedule_;  // of pairs_: tet corners, triangle corners
   ContactStats stats_;
   ContactInterfaces interfaces_;
+  std::vector<char> owned_;  // per tet, the pairs evaluate() integrates; empty: all
   const BlockSparseMatrix* bound_ = nullptr;
   bool pattern_changed_ = false;
 };

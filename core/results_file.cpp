@@ -503,13 +503,14 @@ void write_mesh(const H5File& f, const Mesh& mesh, const VectorX& depth, const R
   }
 }
 
-/// /run: the scene, version, threads, analysis, status "running", the reaction and contact rows'
-/// names.
+/// /run: the scene, version, threads, ranks, analysis, status "running", the reaction and contact
+/// rows' names.
 void write_run(const H5File& f, const RunInfo& info) {
   f.create_group("/run");
   f.set_string_attribute("/run", "scene", info.scene_json);
   f.set_string_attribute("/run", "version", info.version);
   f.set_attribute("/run", "threads", info.threads);
+  f.set_attribute("/run", "ranks", info.ranks);
   f.set_string_attribute("/run", "analysis", info.analysis);
   f.create_text("/run/status", kStatusBytes);
   f.write_text("/run/status", "running");

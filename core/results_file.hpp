@@ -15,7 +15,7 @@
 ///   (with material-depth contact only), node_sets/NAME (named node sets of the meshes, '/' in
 ///   NAME written '_'); with several sidecar blocks also blocks/<k>/tets (block-local node
 ///   indices; attribute name);
-///   /run attributes scene, version, threads, analysis; datasets status ("running",
+///   /run attributes scene, version, threads, ranks, analysis; datasets status ("running",
 ///   "completed", "failed") and message (fixed-length strings, rewritten in place),
 ///   constraint_names, contact_names;
 ///   /reference: the state before the first step (x, and the fields the run writes: zeros where
@@ -89,7 +89,7 @@ struct RunInfo {
   std::string scene_json;                     ///< the scene file text
   std::string version;                        ///< depthfem version
   std::string analysis;                       ///< "static", "dynamic", ...
-  int threads = 1;                            ///< worker threads of the run
+  int threads = 1;                            ///< worker threads of the run (per rank)
   std::vector<std::string> constraint_names;  ///< one per boundary condition, the reaction rows
   /// One per contact interface, in the order every step reports them (StepRecord::contact).
   std::vector<std::string> contact_names;
@@ -100,6 +100,7 @@ struct RunInfo {
   ResultFields fields;         ///< the per-step fields every step will hold
   Points initial_velocity;     ///< #nodes x 3 [m/s], when fields.velocity
   RestartLayout restart = {};  ///< what every step's restart record holds (none: no /restart)
+  int ranks = 1;               ///< processes of the run (mpirun -n)
 };
 
 /// Writes a results file. Every call leaves the file flushed and complete up to that call, so a

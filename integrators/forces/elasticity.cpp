@@ -261,7 +261,7 @@ double Elasticity::evaluate(const Points& x, VectorX* gradient, BlockSparseMatri
   if (hessian && !gradient) throw std::logic_error("elasticity: a Hessian needs a gradient too");
   double total = 0;
   for (const Group& grp : groups_) {
-    if (hessian && grp.scatter.empty())
+    if (hessian && grp.scatter.size() != static_cast<size_t>(16 * grp.block.size()))
       throw std::logic_error("elasticity: bind() the Hessian first");
     const auto run = [&](const auto& m, const ViscoelasticHistory* history) {
       if (hessian)

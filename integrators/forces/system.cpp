@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "integrators/solvers/ranks.hpp"
+
 namespace depthfem {
 
 void System::begin_step(const Points& x) {
@@ -17,13 +19,22 @@ void System::set_load(double load) {
   for (const auto& m : modules_) m->set_load(load);
 }
 
+bool System::evaluates(size_t m) const {
+  return !ranks_ || shares_[m] == Share::kOwnPart || ranks_->rank() == 0;
+}
+
+void System::sum_over_ranks(VectorX& v) const {
+  if (ranks_) ranks_->sum(v);
+}
+
 double System::max_step(const Points& x, const Points& dx) const {
   double alpha = std::numeric_limits<double>::infinity();
-  for (const auto& m : modules_) {
-    PhaseTimers::Scope t(timers_, "force/stiffness: " + m->name());
-    alpha = std::min(alpha, m->max_step(x, dx));
+  for (size_t m = 0; m < modules_.size(); ++m) {
+    if (!evaluates(m)) continue;
+    PhaseTimers::Scope t(timers_, "force/stiffness: " + modules_[m]->name());
+    alpha = std::min(alpha, modules_[m]->max_step(x, dx));
   }
-  return alpha;
+  return ranks_ ? ranks_->min(alpha) : alpha;
 }
 
 void System::complete_step(const Points& x) {
@@ -54,11 +65,16 @@ void System::prepare(const Points& x) {
 
 double System::evaluate(const Points& x, VectorX* g, BlockSparseMatrix* H) {
   double total = 0;
-  for (const auto& m : modules_) {
-    PhaseTimers::Scope t(timers_, "force/stiffness: " + m->name());
-    total += m->evaluate(x, g, H);
-    if (!std::isfinite(total)) return total;
+  for (size_t m = 0; m < modules_.size(); ++m) {
+    if (!evaluates(m)) continue;
+    PhaseTimers::Scope t(timers_, "force/stiffness: " + modules_[m]->name());
+    total += modules_[m]->evaluate(x, g, H);
+    if (!std::isfinite(total)) break;
   }
+  if (!ranks_) return total;
+  PhaseTimers::Scope t(timers_, "force/stiffness: sum over ranks");
+  total = ranks_->sum(total);
+  if (g && std::isfinite(total)) ranks_->sum(*g);
   return total;
 }
 

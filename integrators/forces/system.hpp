@@ -10,20 +10,34 @@
 
 namespace depthfem {
 
+class Ranks;
+
+/// Which ranks of a distributed run (Ranks) evaluate a module.
+enum class Share {
+  kWhole,    ///< rank 0 evaluates all of it (modules over nodes: gravity, tethers, obstacles)
+  kOwnPart,  ///< every rank evaluates its own part (the tets it owns, the contact pairs of them)
+};
+
 /// Sums E, grad E and hess E over force modules and owns the global Hessian and its pattern.
 /// The couplings of the modules whose couplings are fixed (ForceModule::fixed_couplings) are
 /// gathered once; a rebuild merges them with the others' and moves the fixed modules' offsets
 /// to the new pattern (rebind) rather than searching for them again. Module evaluation is timed as
 /// "force/stiffness: <module>", preparation as "collision detection: <module>".
+/// In a distributed run (distribute()) every rank holds all positions; each sums the modules'
+/// parts it evaluates (Share) and the energies, gradients and step bounds are then summed over
+/// the ranks, so that every rank sees the totals. The Hessian stays each rank's own part: its
+/// sum is assembled by the linear solver (DistributedSolver).
 class System {
  public:
   System(Index num_nodes, PhaseTimers& timers) : num_nodes_(num_nodes), timers_(timers) {}
 
-  /// Adds a module and returns a reference to it (the System owns it).
+  /// Adds a module and returns a reference to it (the System owns it). `share`: which ranks of a
+  /// distributed run evaluate it (without ranks: this process, all of it).
   template <class M>
-  M& add(std::unique_ptr<M> module) {
+  M& add(std::unique_ptr<M> module, Share share = Share::kWhole) {
     M& ref = *module;
     modules_.push_back(std::move(module));
+    shares_.push_back(share);
     pattern_valid_ = false;
     fixed_rows_.reset();
     return ref;
@@ -59,12 +73,24 @@ class System {
   /// Forces a rebuild of the Hessian pattern (a module's couplings changed).
   void invalidate_pattern() { pattern_valid_ = false; }
 
+  /// Makes this a distributed System over `ranks` (which must outlive it), or a serial one (null).
+  void distribute(Ranks* ranks) { ranks_ = ranks; }
+  /// The ranks of a distributed System, or null.
+  Ranks* ranks() const { return ranks_; }
+  /// Sums `v` over the ranks in a distributed System (a product with this rank's part of the
+  /// Hessian, its diagonal); nothing otherwise.
+  void sum_over_ranks(VectorX& v) const;
+
  private:
   double evaluate(const Points& x, VectorX* g, BlockSparseMatrix* H);
 
   Index num_nodes_;
   PhaseTimers& timers_;
   std::vector<std::unique_ptr<ForceModule>> modules_;
+  std::vector<Share> shares_;  ///< per module
+  Ranks* ranks_ = nullptr;
+  /// Whether this process evaluates module m (all of it, or its own part).
+  bool evaluates(size_t m) const;
   void rebuild_pattern();
 
   BlockSparseMatrix hessian_;

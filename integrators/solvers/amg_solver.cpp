@@ -2,11 +2,11 @@
 
 #include <petscksp.h>
 
-#include <cstdlib>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
 
+#include "integrators/solvers/petsc_session.hpp"
 #include "integrators/solvers/thread_budget.hpp"
 
 namespace depthfem {
@@ -15,53 +15,6 @@ namespace {
 
 static_assert(std::is_same_v<PetscInt, Index>, "PETSc's index type must be depthfem's Index");
 static_assert(std::is_same_v<PetscScalar, double>, "PETSc must be built for real doubles");
-
-// Throws with PETSc's message when a call failed.
-void check(PetscErrorCode code, const char* what) {
-  if (code == 0) return;
-  const char* text = nullptr;
-  PetscErrorMessage(code, &text, nullptr);
-  throw std::runtime_error(std::string("PETSc ") + what + " failed: " + (text ? text : "?"));
-}
-
-// PETSc (and MPI, which starts helper threads) is initialised on first use only and finalised
-// at exit. Errors come back as codes (no traceback printed); PETSc installs no signal handlers.
-struct PetscSession {
-  PetscSession() {
-    // Started without mpirun, the process is an MPI singleton, and Open MPI (Debian's MPI)
-    // looks for a runtime daemon to join and probes every transport before it settles on one:
-    // 0.4 s of wall time (0.1 s of CPU) for each run. A singleton needs neither, so unless the
-    // user or mpirun chose, it runs isolated with the self transport: 0.15-0.2 s.
-    if (!std::getenv("OMPI_COMM_WORLD_SIZE")) {
-      setenv("OMPI_MCA_ess_singleton_isolated", "1", 0);
-      setenv("OMPI_MCA_pml", "ob1", 0);
-      setenv("OMPI_MCA_btl", "self", 0);
-    }
-    static char arg0[] = "depthfem", arg1[] = "-no_signal_handler";
-    static char* args[] = {arg0, arg1, nullptr};
-    int argc = 2;
-    char** argv = args;
-    check(PetscInitialize(&argc, &argv, nullptr, nullptr), "initialisation");
-    check(PetscPushErrorHandler(PetscReturnErrorHandler, nullptr), "error handler");
-    // GAMG aggregates on the squared graph of the first two levels (PETSc's default: the first
-    // only): coarser levels and cheaper Galerkin products. Setup per Newton iteration fell by
-    // a fifth on the 1.05 M-tet cantilever (5.67 against 7.00 CPU s per Newton iteration, 43
-    // against 33 CG iterations) and on the 178 k-tet sliding blocks (1.69 against 2.09); the
-    // 164 k-tet cantilever came out even. PETSc 3.18 reads it from its options database only
-    // (PCGAMGSetAggressiveLevels leaves the level count unchanged); a value in PETSC_OPTIONS wins.
-    PetscBool given = PETSC_FALSE, given_new_name = PETSC_FALSE;
-    check(PetscOptionsHasName(nullptr, nullptr, "-pc_gamg_square_graph", &given), "options");
-    check(PetscOptionsHasName(nullptr, nullptr, "-pc_gamg_aggressive_coarsening", &given_new_name),
-          "options");
-    if (!given && !given_new_name)
-      check(PetscOptionsSetValue(nullptr, "-pc_gamg_square_graph", "2"), "options");
-  }
-  ~PetscSession() { PetscFinalize(); }
-};
-
-void start_petsc() {
-  static PetscSession session;
-}
 
 }  // namespace
 
@@ -100,68 +53,53 @@ void AmgSolver::Impl::set_up(const BlockSparseMatrix& M) {
   values.resize(pattern.col.size());
   M.scalar_values(pattern, values.data());
   const PetscInt n = static_cast<PetscInt>(pattern.row_begin.size()) - 1;
-  check(MatCreate(PETSC_COMM_WORLD, &A), "MatCreate");
-  check(MatSetSizes(A, n, n, n, n), "MatSetSizes");
-  check(MatSetBlockSize(A, 3), "MatSetBlockSize");
+  petsc_check(MatCreate(PETSC_COMM_WORLD, &A), "MatCreate");
+  petsc_check(MatSetSizes(A, n, n, n, n), "MatSetSizes");
+  petsc_check(MatSetBlockSize(A, 3), "MatSetBlockSize");
   // AIJ: PETSc's sequential type on one process, MPIAIJ on several (PETSC_OPTIONS' -mat_type
   // mpiaij forces the latter on one). On one process the sequential kernels are the faster:
   // the 1.05 M-tet cantilever's multigrid set-up took 6.9 s against 9.8 s (its sparse matrix
   // products 5.9 against 8.4 s), the run 1.57 against 2.20 GB. Of the two preallocations only
   // the one for A's type acts.
-  check(MatSetType(A, MATAIJ), "MatSetType");
-  check(MatSetFromOptions(A), "MatSetFromOptions");
+  petsc_check(MatSetType(A, MATAIJ), "MatSetType");
+  petsc_check(MatSetFromOptions(A), "MatSetFromOptions");
   const PetscInt* rows = pattern.row_begin.data();
-  check(MatSeqAIJSetPreallocationCSR(A, rows, pattern.col.data(), values.data()), "hand-over");
-  check(MatMPIAIJSetPreallocationCSR(A, rows, pattern.col.data(), values.data()), "hand-over");
+  petsc_check(MatSeqAIJSetPreallocationCSR(A, rows, pattern.col.data(), values.data()),
+              "hand-over");
+  petsc_check(MatMPIAIJSetPreallocationCSR(A, rows, pattern.col.data(), values.data()),
+              "hand-over");
   PetscBool sequential = PETSC_FALSE;
-  check(PetscObjectTypeCompare(reinterpret_cast<PetscObject>(A), MATSEQAIJ, &sequential), "type");
+  petsc_check(PetscObjectTypeCompare(reinterpret_cast<PetscObject>(A), MATSEQAIJ, &sequential),
+              "type");
   in_place = sequential;
   MatInfo info;
-  check(MatGetInfo(A, MAT_LOCAL, &info), "MatGetInfo");
+  petsc_check(MatGetInfo(A, MAT_LOCAL, &info), "MatGetInfo");
   if (info.nz_used != static_cast<PetscLogDouble>(pattern.col.size()))  // A's array is ours
     throw std::logic_error("PETSc's matrix does not hold the pattern's entries");
   if (in_place) values = {};  // later values go straight into A's own array
-  check(MatSetOption(A, MAT_SPD, PETSC_TRUE), "MatSetOption");
-  check(MatCreateVecs(A, &x, &b), "MatCreateVecs");
-  check(VecDuplicate(x, &coords), "VecDuplicate");
+  petsc_check(MatSetOption(A, MAT_SPD, PETSC_TRUE), "MatSetOption");
+  petsc_check(MatCreateVecs(A, &x, &b), "MatCreateVecs");
+  petsc_check(VecDuplicate(x, &coords), "VecDuplicate");
 
-  check(KSPCreate(PETSC_COMM_WORLD, &ksp), "KSPCreate");
-  check(KSPSetType(ksp, KSPCG), "KSPSetType");
-  check(KSPSetNormType(ksp, KSP_NORM_UNPRECONDITIONED), "KSPSetNormType");
-  check(KSPSetTolerances(ksp, options.tolerance, 0.0, PETSC_DEFAULT, options.max_iterations),
-        "KSPSetTolerances");
-  PC pc;
-  check(KSPGetPC(ksp, &pc), "KSPGetPC");
-  if (options.preconditioner == AmgPreconditioner::kGamg) {
-    check(PCSetType(pc, PCGAMG), "PCSetType");
-    check(PCGAMGSetReuseInterpolation(pc, PETSC_TRUE), "PCGAMGSetReuseInterpolation");
-    // Dropping graph edges weaker than 2 % of the diagonal from the aggregation and stopping at
-    // 1000 coarse unknowns: on the bent cantilever (95 k and 266 k unknowns) CG needs 32 and 33
-    // iterations for three Newton steps instead of 52 and 55 (PETSc's defaults 0 and 50).
-    PetscReal threshold = 0.02;
-    check(PCGAMGSetThreshold(pc, &threshold, 1), "PCGAMGSetThreshold");
-    check(PCGAMGSetCoarseEqLim(pc, 1000), "PCGAMGSetCoarseEqLim");
-  } else {
-    check(PCSetType(pc, PCHYPRE), "PCSetType");
-    check(PCHYPRESetType(pc, "boomeramg"), "PCHYPRESetType");
-  }
-  check(KSPSetFromOptions(ksp), "KSPSetFromOptions");
+  petsc_check(KSPCreate(PETSC_COMM_WORLD, &ksp), "KSPCreate");
+  configure_amg_cg(ksp, options);
+  petsc_check(KSPSetFromOptions(ksp), "KSPSetFromOptions");
   version = M.pattern_version();
 }
 
 void AmgSolver::Impl::update_values(const BlockSparseMatrix& M) {
   if (in_place) {
     PetscScalar* a = nullptr;
-    check(MatSeqAIJGetArrayWrite(A, &a), "MatSeqAIJGetArrayWrite");
+    petsc_check(MatSeqAIJGetArrayWrite(A, &a), "MatSeqAIJGetArrayWrite");
     M.scalar_values(pattern, a);
-    check(MatSeqAIJRestoreArrayWrite(A, &a), "MatSeqAIJRestoreArrayWrite");
+    petsc_check(MatSeqAIJRestoreArrayWrite(A, &a), "MatSeqAIJRestoreArrayWrite");
     return;
   }
   M.scalar_values(pattern, values.data());
   const PetscInt n = static_cast<PetscInt>(pattern.row_begin.size()) - 1;
-  check(MatUpdateMPIAIJWithArrays(A, n, n, n, n, pattern.row_begin.data(), pattern.col.data(),
-                                  values.data()),
-        "matrix update");
+  petsc_check(MatUpdateMPIAIJWithArrays(A, n, n, n, n, pattern.row_begin.data(), pattern.col.data(),
+                                        values.data()),
+              "matrix update");
 }
 
 AmgSolver::AmgSolver(AmgSolverOptions options) : impl_(std::make_unique<Impl>()) {
@@ -182,12 +120,12 @@ AmgSolveStats AmgSolver::solve(const BlockSparseMatrix& M, const VectorX& rhs, V
   }
   if (positions) {  // rigid-body modes at the current positions: 3 translations, 3 rotations
     s.coordinates = as_dofs(*positions);
-    check(VecPlaceArray(s.coords, s.coordinates.data()), "VecPlaceArray");
+    petsc_check(VecPlaceArray(s.coords, s.coordinates.data()), "VecPlaceArray");
     MatNullSpace modes;
-    check(MatNullSpaceCreateRigidBody(s.coords, &modes), "MatNullSpaceCreateRigidBody");
-    check(MatSetNearNullSpace(s.A, modes), "MatSetNearNullSpace");
-    check(MatNullSpaceDestroy(&modes), "MatNullSpaceDestroy");
-    check(VecResetArray(s.coords), "VecResetArray");
+    petsc_check(MatNullSpaceCreateRigidBody(s.coords, &modes), "MatNullSpaceCreateRigidBody");
+    petsc_check(MatSetNearNullSpace(s.A, modes), "MatSetNearNullSpace");
+    petsc_check(MatNullSpaceDestroy(&modes), "MatNullSpaceDestroy");
+    petsc_check(VecResetArray(s.coords), "VecResetArray");
   }
 
   // A preconditioner from an earlier matrix of this pattern serves while CG needs at most
@@ -196,8 +134,8 @@ AmgSolveStats AmgSolver::solve(const BlockSparseMatrix& M, const VectorX& rhs, V
   AmgSolveStats stats;
   bool reuse = s.lag_ok && s.options.lag_preconditioner;
   for (;;) {
-    check(KSPSetReusePreconditioner(s.ksp, reuse ? PETSC_TRUE : PETSC_FALSE), "reuse");
-    check(KSPSetOperators(s.ksp, s.A, s.A), "KSPSetOperators");
+    petsc_check(KSPSetReusePreconditioner(s.ksp, reuse ? PETSC_TRUE : PETSC_FALSE), "reuse");
+    petsc_check(KSPSetOperators(s.ksp, s.A, s.A), "KSPSetOperators");
     const AmgSolveStats one = s.run(rhs, sol);
     stats.iterations += one.iterations;
     stats.converged = one.converged;
@@ -217,16 +155,16 @@ AmgSolveStats AmgSolver::solve(const BlockSparseMatrix& M, const VectorX& rhs, V
 
 AmgSolveStats AmgSolver::Impl::run(const VectorX& rhs, VectorX& sol) {
   sol.setZero(rhs.size());
-  check(VecPlaceArray(b, rhs.data()), "VecPlaceArray");
-  check(VecPlaceArray(x, sol.data()), "VecPlaceArray");
+  petsc_check(VecPlaceArray(b, rhs.data()), "VecPlaceArray");
+  petsc_check(VecPlaceArray(x, sol.data()), "VecPlaceArray");
   const PetscErrorCode code = KSPSolve(ksp, b, x);
   VecResetArray(b);
   VecResetArray(x);
-  check(code, "KSPSolve");
+  petsc_check(code, "KSPSolve");
   AmgSolveStats stats;
   KSPConvergedReason reason;
-  check(KSPGetIterationNumber(ksp, &stats.iterations), "KSPGetIterationNumber");
-  check(KSPGetConvergedReason(ksp, &reason), "KSPGetConvergedReason");
+  petsc_check(KSPGetIterationNumber(ksp, &stats.iterations), "KSPGetIterationNumber");
+  petsc_check(KSPGetConvergedReason(ksp, &reason), "KSPGetConvergedReason");
   stats.converged = reason > 0;
   return stats;
 }

@@ -40,10 +40,31 @@ void LinearSolver::set_decoupled_nodes(std::vector<char> nodes) {
   if (direct_) direct_->set_decoupled_nodes(decoupled_);
 }
 
+void LinearSolver::distribute(Ranks& ranks) {
+  DistributedSolverOptions o{.method = DistributedMethod::kDirect,
+                             .tolerance = options_.tolerance,
+                             .max_iterations = options_.max_iterations,
+                             .restart = options_.restart,
+                             .amg = options_.amg};
+  if (options_.kind == LinearSolverKind::kAmg) o.method = DistributedMethod::kAmg;
+  if (options_.kind == LinearSolverKind::kGmres) o.method = DistributedMethod::kGmres;
+  if (options_.kind == LinearSolverKind::kCg) o.method = DistributedMethod::kCg;
+  distributed_ = std::make_unique<DistributedSolver>(ranks, o);
+}
+
 LinearSolveStats LinearSolver::solve(const BlockSparseMatrix& A, const VectorX& b, VectorX& x,
                                      const Points* positions, double tolerance) {
   x.setZero(b.size());
   if (b.norm() == 0) return {0, 0.0, true};
+  if (distributed_) {
+    const DistributedSolveStats s = distributed_->solve(A, b, x, positions);
+    return {.iterations = s.iterations,
+            .relative_residual = 0,  // not computed: A is spread over the ranks
+            .reached_tolerance = s.converged,
+            .shift = 0,
+            .factored = options_.kind == LinearSolverKind::kAuto ||
+                        options_.kind == LinearSolverKind::kDirect};
+  }
   switch (options_.kind) {
     case LinearSolverKind::kAuto:
       if (choice_ == Choice::kUndecided) {

@@ -7,6 +7,7 @@
 #include "core/block_sparse_matrix.hpp"
 #include "integrators/solvers/amg_solver.hpp"
 #include "integrators/solvers/direct_solver.hpp"
+#include "integrators/solvers/distributed_solver.hpp"
 
 namespace depthfem {
 
@@ -61,6 +62,11 @@ class LinearSolver {
   /// Nodes whose off-diagonal blocks every matrix to solve holds zero (1 per node; see
   /// DirectSolver::set_decoupled_nodes).
   void set_decoupled_nodes(std::vector<char> nodes);
+  /// Solves every later system across `ranks` (DistributedSolver; which must outlive this):
+  /// A is then each rank's part, b and x whole on every rank. kAuto and kDirect take MUMPS,
+  /// kAmg CG with GAMG (MUMPS where CG fails), kGmres and kCg PETSc's Jacobi-preconditioned
+  /// methods with this solver's tolerance and caps.
+  void distribute(Ranks& ranks);
   /// Starts from x = 0. Returns statistics; x holds the best solution found. `positions`
   /// (#nodes x 3, current) give AMG its rigid-body modes (without them: translations only).
   /// `tolerance` (Newton's forcing term; 0: none) is where the direct solver's CG on a kept
@@ -82,8 +88,9 @@ class LinearSolver {
 
   LinearSolverOptions options_;
   std::vector<char> decoupled_;
-  std::unique_ptr<DirectSolver> direct_;  // created on first use
-  std::unique_ptr<AmgSolver> amg_;        // created on first use (starts PETSc and MPI)
+  std::unique_ptr<DirectSolver> direct_;            // created on first use
+  std::unique_ptr<AmgSolver> amg_;                  // created on first use (starts PETSc and MPI)
+  std::unique_ptr<DistributedSolver> distributed_;  // a distributed run's
   enum class Choice { kUndecided, kDirect, kAmg } choice_ = Choice::kUndecided;  // kAuto
 };
 

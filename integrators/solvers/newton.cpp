@@ -53,6 +53,7 @@ Points NewtonSolver::linearised_step(const Points& x, const Points& u) {
   system_.hessian(x, g);
   BlockSparseMatrix& H = system_.matrix();
   H.multiply(as_dofs(u), Hu);
+  system_.sum_over_ranks(Hu);  // each rank holds its part of H
   VectorX rhs = -(g + Hu);
   constraints_.project(rhs);
   constraints_.project(H);
@@ -120,7 +121,9 @@ NewtonResult NewtonSolver::solve(Points& x) {
     bool accepted =
         (!energy_rule || g.dot(dx) < 0) && line_search(x, as_points(dx), energy, residual);
     if (!accepted && options_.gradient_fallback) {
-      const VectorX d = H.diagonal().cwiseAbs().cwiseMax(1e-300);
+      VectorX d = H.diagonal();
+      system_.sum_over_ranks(d);
+      d = d.cwiseAbs().cwiseMax(1e-300);
       dx = -g.cwiseQuotient(d);
       accepted = line_search(x, as_points(dx), energy, residual);
     }

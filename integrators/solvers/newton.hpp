@@ -78,6 +78,7 @@ class NewtonSolver {
   NewtonSolver(System& system, const Constraints& constraints, NewtonOptions options)
       : system_(system), constraints_(constraints), options_(options), linear_(options.linear) {
     linear_.set_decoupled_nodes(constraints.fully_constrained_nodes());
+    if (system.ranks()) linear_.distribute(*system.ranks());
   }
 
   /// Solves in place from x, whose constrained components must already hold their targets.

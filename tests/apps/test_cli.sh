@@ -15,15 +15,8 @@ grep -q "= linear solve" "$tmp/ok.log" || fail "no timing table"
 grep -q "status: completed" "$tmp/info.log" || fail "info does not report completion"
 [ -f "$tmp/ok.xmf" ] && [ -f "$tmp/ok.xdmf2" ] || fail "no XDMF sidecars"
 
-"$exe" run "$src/apps/scenes/uniaxial_block.json" --out "$tmp/bad.h5" --set boundary.3.offset=-1.5 \
-  --set solver.min_increment=0.01 > /dev/null 2> "$tmp/err.log"
-rc=$?
-[ $rc -eq 1 ] || fail "failed run exited $rc, expected 1"
-[ "$(wc -l < "$tmp/err.log")" -eq 1 ] || fail "expected one error line, got: $(cat "$tmp/err.log")"
-grep -q "^depthfem: error: $src/apps/scenes/uniaxial_block.json: load increment fell below min_increment" "$tmp/err.log" || fail "error line: $(cat "$tmp/err.log")"
-"$exe" info "$tmp/bad.h5" > "$tmp/info2.log" || fail "info on the failed run exited $?"
-grep -q "status: failed" "$tmp/info2.log" || fail "failed run not marked failed"
-grep -Eq "steps: [1-9]" "$tmp/info2.log" || fail "failed run kept no steps"
+source "$src/tests/apps/failed_run.sh"
+check_failed_run
 
 "$exe" run "$src/apps/scenes/uniaxial_block.json" > /dev/null 2> "$tmp/usage.log"
 [ $? -eq 2 ] || fail "missing --out must be a usage error (exit 2)"

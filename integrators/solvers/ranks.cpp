@@ -1,0 +1,191 @@
+#include "integrators/solvers/ranks.hpp"
+
+#include <petscmat.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdlib>
+#include <limits>
+
+#include "integrators/solvers/petsc_session.hpp"
+
+namespace depthfem {
+
+namespace {
+
+int environment_int(const char* name, int otherwise) {
+  const char* text = std::getenv(name);
+  return text ? std::atoi(text) : otherwise;
+}
+
+bool g_running = false;
+
+// For each tet, the tets sharing a face with it (sorted), as compressed rows over [first, last).
+struct DualRows {
+  std::vector<PetscInt> begin, neighbours;
+};
+DualRows dual_rows(const TetIndices& tets, Index first, Index last) {
+  // Every face as its sorted node triple with its tet; equal triples are neighbouring tets.
+  struct Face {
+    std::array<Index, 3> nodes;
+    Index tet;
+  };
+  std::vector<Face> faces;
+  faces.reserve(static_cast<size_t>(4 * tets.rows()));
+  for (Index t = 0; t < tets.rows(); ++t) {
+    for (int k = 0; k < 4; ++k) {
+      Face f{{}, t};
+      for (int a = 0, j = 0; a < 4; ++a)
+        if (a != k) f.nodes[j++] = tets(t, a);
+      std::ranges::sort(f.nodes);
+      faces.push_back(f);
+    }
+  }
+  std::ranges::sort(faces, {}, [](const Face& f) { return std::pair(f.nodes, f.tet); });
+  std::vector<std::vector<PetscInt>> adjacent(static_cast<size_t>(last - first));
+  for (size_t i = 0; i + 1 < faces.size(); ++i) {
+    if (faces[i].nodes != faces[i + 1].nodes) continue;
+    const Index a = faces[i].tet, b = faces[i + 1].tet;
+    if (a >= first && a < last) adjacent[static_cast<size_t>(a - first)].push_back(b);
+    if (b >= first && b < last) adjacent[static_cast<size_t>(b - first)].push_back(a);
+  }
+  DualRows out;
+  out.begin.push_back(0);
+  for (std::vector<PetscInt>& row : adjacent) {
+    std::ranges::sort(row);
+    out.neighbours.insert(out.neighbours.end(), row.begin(), row.end());
+    out.begin.push_back(static_cast<PetscInt>(out.neighbours.size()));
+  }
+  return out;
+}
+
+}  // namespace
+
+struct Ranks::Vectors {
+  Index length = -1;
+  Vec parallel = nullptr, all = nullptr;
+  VecScatter to_all = nullptr;
+  ~Vectors() {
+    VecScatterDestroy(&to_all);
+    VecDestroy(&all);
+    VecDestroy(&parallel);
+  }
+};
+
+int Ranks::launched() {
+  return std::max(1, environment_int("OMPI_COMM_WORLD_SIZE", 1));
+}
+
+int Ranks::launched_rank() {
+  return environment_int("OMPI_COMM_WORLD_RANK", 0);
+}
+
+bool Ranks::running() {
+  return g_running;
+}
+
+void Ranks::abort_run(int code) {
+  MPI_Abort(PETSC_COMM_WORLD, code);
+  std::abort();
+}
+
+Ranks::Ranks() {
+  start_petsc();
+  MPI_Comm_rank(PETSC_COMM_WORLD, &rank_);
+  MPI_Comm_size(PETSC_COMM_WORLD, &size_);
+  g_running = size_ > 1;
+}
+
+Ranks::~Ranks() = default;
+
+void Ranks::partition(const TetIndices& tets, Index num_nodes) {
+  const Index n = tets.rows();
+  tet_owner_.assign(static_cast<size_t>(n), 0);
+  node_owner_.assign(static_cast<size_t>(num_nodes), 0);
+  if (size_ == 1) return;
+  // Each rank hands the partitioner an equal slice of the dual graph's rows.
+  const Index first = n * rank_ / size_, last = n * (rank_ + 1) / size_;
+  const DualRows rows = dual_rows(tets, first, last);
+  PetscInt *begin = nullptr, *neighbours = nullptr;  // the adjacency matrix frees them
+  petsc_check(PetscMalloc1(rows.begin.size(), &begin), "PetscMalloc1");
+  petsc_check(PetscMalloc1(std::max<size_t>(rows.neighbours.size(), 1), &neighbours),
+              "PetscMalloc1");
+  std::ranges::copy(rows.begin, begin);
+  std::ranges::copy(rows.neighbours, neighbours);
+  Mat adjacency = nullptr;
+  petsc_check(
+      MatCreateMPIAdj(PETSC_COMM_WORLD, last - first, n, begin, neighbours, nullptr, &adjacency),
+      "MatCreateMPIAdj");
+  MatPartitioning partitioner = nullptr;
+  IS local = nullptr, all = nullptr;
+  petsc_check(MatPartitioningCreate(PETSC_COMM_WORLD, &partitioner), "MatPartitioningCreate");
+  petsc_check(MatPartitioningSetAdjacency(partitioner, adjacency), "MatPartitioningSetAdjacency");
+  petsc_check(MatPartitioningSetType(partitioner, MATPARTITIONINGPTSCOTCH),
+              "MatPartitioningSetType");
+  petsc_check(MatPartitioningSetFromOptions(partitioner), "MatPartitioningSetFromOptions");
+  petsc_check(MatPartitioningApply(partitioner, &local), "MatPartitioningApply");
+  petsc_check(ISAllGather(local, &all), "ISAllGather");
+  const PetscInt* owner = nullptr;
+  petsc_check(ISGetIndices(all, &owner), "ISGetIndices");
+  for (Index t = 0; t < n; ++t) tet_owner_[static_cast<size_t>(t)] = static_cast<int>(owner[t]);
+  ISRestoreIndices(all, &owner);
+  ISDestroy(&all);
+  ISDestroy(&local);
+  MatPartitioningDestroy(&partitioner);
+  MatDestroy(&adjacency);
+  std::ranges::fill(node_owner_, size_);
+  for (Index t = 0; t < n; ++t)
+    for (int a = 0; a < 4; ++a) {
+      int& o = node_owner_[static_cast<size_t>(tets(t, a))];
+      o = std::min(o, tet_owner_[static_cast<size_t>(t)]);
+    }
+  for (int& o : node_owner_) o = o == size_ ? 0 : o;  // a node of no tet (none after validation)
+}
+
+double Ranks::sum(double value) const {
+  double out = 0;
+  MPI_Allreduce(&value, &out, 1, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  return out;
+}
+
+double Ranks::min(double value) const {
+  double out = 0;
+  MPI_Allreduce(&value, &out, 1, MPI_DOUBLE, MPI_MIN, PETSC_COMM_WORLD);
+  return out;
+}
+
+void Ranks::sum(VectorX& v) {
+  if (size_ == 1) return;
+  if (!vectors_ || vectors_->length != v.size()) {
+    vectors_ = std::make_unique<Vectors>();
+    vectors_->length = v.size();
+    petsc_check(VecCreateMPI(PETSC_COMM_WORLD, PETSC_DECIDE, v.size(), &vectors_->parallel),
+                "VecCreateMPI");
+    petsc_check(VecScatterCreateToAll(vectors_->parallel, &vectors_->to_all, &vectors_->all),
+                "VecScatterCreateToAll");
+  }
+  Vectors& s = *vectors_;
+  std::vector<PetscInt> rows;
+  std::vector<PetscScalar> values;
+  for (Index i = 0; i < v.size(); ++i)
+    if (v(i) != 0) {
+      rows.push_back(i);
+      values.push_back(v(i));
+    }
+  petsc_check(VecSet(s.parallel, 0.0), "VecSet");
+  petsc_check(VecSetValues(s.parallel, static_cast<PetscInt>(rows.size()), rows.data(),
+                           values.data(), ADD_VALUES),
+              "VecSetValues");
+  petsc_check(VecAssemblyBegin(s.parallel), "VecAssemblyBegin");
+  petsc_check(VecAssemblyEnd(s.parallel), "VecAssemblyEnd");
+  petsc_check(VecScatterBegin(s.to_all, s.parallel, s.all, INSERT_VALUES, SCATTER_FORWARD),
+              "VecScatterBegin");
+  petsc_check(VecScatterEnd(s.to_all, s.parallel, s.all, INSERT_VALUES, SCATTER_FORWARD),
+              "VecScatterEnd");
+  const PetscScalar* all = nullptr;
+  petsc_check(VecGetArrayRead(s.all, &all), "VecGetArrayRead");
+  std::copy(all, all + v.size(), v.data());
+  VecRestoreArrayRead(s.all, &all);
+}
+
+}  // namespace depthfem
