@@ -37,7 +37,7 @@ constexpr double kSampleInterval = 0.01;  // [s]
 struct Trajectory {
   std::vector<Points> tips;  // tip positions at t = k * kSampleInterval, k = 1, 2, ...
   double seconds = 0;
-  long steps = 0;   // time steps, or ARKODE's internal steps
+  long steps = 0;   // time steps (ARKODE, CVODE: internal steps)
   long newton = 0;  // Newton iterations (implicit schemes; DIRK: over all stages)
   long linear_solves = 0, factorizations = 0;
   std::string failure;
@@ -55,12 +55,10 @@ Trajectory run_case(const std::string& scene_path, std::vector<Override> o,
   Trajectory t;
   const Integrator integrator = scene.dynamic_options.integrator;
   const bool explicit_rk = integrator == Integrator::kArkode;
-  const bool adaptive_implicit =
-      integrator == Integrator::kArkodeDirk || integrator == Integrator::kCvodeBdf;
   RunOptions options;
   options.threads = 1;
   options.observer = [&](const StepRecord& s, const Points& x) {
-    t.steps += explicit_rk ? s.newton_iterations : adaptive_implicit ? 0 : 1;
+    t.steps += s.time_steps;
     if (!explicit_rk) t.newton += s.newton_iterations;
     t.linear_solves += s.linear_solves;
     t.factorizations += s.factorizations;
