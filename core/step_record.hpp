@@ -59,13 +59,16 @@ struct ElementFields {
 
 /// One completed step.
 struct StepRecord {
-  Index index = 0;                ///< 0, 1, ... in the order completed
-  double load = 0;                ///< load factor in (0, 1] (static) or time [s]
-  bool settling = false;          ///< a quasi-viscous step at full load (static)
-  int newton_iterations = 0;      ///< implicit: Newton steps; ARKODE: internal Runge-Kutta steps
-  int linear_iterations = 0;      ///< summed over the Newton steps
-  int linear_solves = 0;          ///< linear systems solved (one per Newton step)
-  int factorizations = 0;         ///< of those, solved by a new LL^T factorisation
+  Index index = 0;            ///< 0, 1, ... in the order completed
+  double load = 0;            ///< load factor in (0, 1] (static) or time [s]
+  bool settling = false;      ///< a quasi-viscous step at full load (static)
+  int newton_iterations = 0;  ///< implicit: Newton steps; ARKODE: internal Runge-Kutta steps
+  int linear_iterations = 0;  ///< summed over the Newton steps
+  int linear_solves = 0;      ///< linear systems solved (one per Newton step)
+  int factorizations = 0;     ///< of those, solved by a new LL^T factorisation
+  /// Time steps taken over the record's interval: 1 for the fixed-step integrators and static
+  /// steps, the accepted internal steps for ARKODE and CVODE.
+  int time_steps = 1;
   std::vector<double> residuals;  ///< |P grad E| [N] at every Newton iterate, the first included
   double energy = 0;              ///< potential energy [J]: every force module but inertia/damping
   double kinetic_energy = 0;      ///< 1/2 v^T M v [J] (time-dependent analyses; 0 otherwise)

@@ -111,6 +111,12 @@ struct DirectSolver::Impl {
   std::unique_ptr<SupernodalCholesky> llt_numeric;  // fills llt
   cholmod_factor* ldlt = nullptr;                   // simplicial LDL^T, analysed on first need
   bool llt_valid = false;  // llt holds the factor of an earlier matrix of this pattern
+  // The solves of the current factor's cycle (the factored one included) and their cost in CG
+  // iterations, the factorisation counted as factor_cost(); refactor: the next matrix is factored
+  // without trying CG (see solve).
+  int cycle_solves = 0;
+  double cycle_cost = 0;
+  bool refactor = false;
   cholmod_dense *X = nullptr, *Y = nullptr, *E = nullptr;  // solve workspace
 
   explicit Impl(DirectSolverOptions o) : options(o) {
@@ -153,6 +159,11 @@ struct DirectSolver::Impl {
   void solve_with(cholmod_factor* L, const VectorX& b, VectorX& x);
   bool reuse(const BlockSparseMatrix& M, const VectorX& b, VectorX& x, double tolerance,
              int& iterations);
+  // What a factorisation is worth in CG iterations on its factor: F flops against about
+  // 4 nnz(L) per iteration, ten times slower for being memory bound; 2 to 50.
+  double factor_cost() const {
+    return std::clamp(analysis.flops / (40 * analysis.factor_entries), 2.0, 50.0);
+  }
 };
 
 // Orders the graph G of the 3x3 blocks (nine times fewer edges than the scalar graph) and
@@ -301,8 +312,7 @@ const DirectAnalysis& DirectSolver::analyse(const BlockSparseMatrix& M) {
 // Conjugate gradients preconditioned by the kept factor; false when they fall short.
 bool DirectSolver::Impl::reuse(const BlockSparseMatrix& M, const VectorX& b, VectorX& x,
                                double tolerance, int& iterations) {
-  const int cap =
-      static_cast<int>(std::clamp(analysis.flops / (40 * analysis.factor_entries), 2.0, 50.0));
+  const int cap = static_cast<int>(factor_cost());
   x.setZero(b.size());
   VectorX r = b, z, p, Ap;
   solve_with(llt, r, z);
@@ -339,15 +349,24 @@ DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& 
     stats.success = true;
     return stats;
   }
-  if (s.llt_valid && s.options.reuse_tolerance > 0 &&
+  if (s.llt_valid && s.options.reuse_tolerance > 0 && !s.refactor &&
       s.reuse(M, b, x, tolerance > 0 ? tolerance : s.options.reuse_tolerance,
               stats.cg_iterations)) {
+    // The mean cost of a solve over a factor's cycle, (factorisation + CG iterations) / solves,
+    // is least where a solve costs as much as that mean (the iterations grow as the matrices
+    // drift from the factored one): once one costs more, the next matrix is factored.
+    ++s.cycle_solves;
+    s.cycle_cost += stats.cg_iterations;
+    s.refactor = stats.cg_iterations * s.cycle_solves > s.cycle_cost;
     stats.success = x.allFinite();
     return stats;
   }
   M.scalar_values(s.pattern, static_cast<double*>(s.A->x));
   stats.factored = true;
   s.llt_valid = false;
+  s.refactor = false;
+  s.cycle_solves = 1;
+  s.cycle_cost = s.factor_cost();
   if (s.factorize_llt()) {
     s.llt_valid = true;
     s.solve_with(s.llt, b, x);

@@ -70,7 +70,11 @@ struct DirectSolveStats {
 /// indefinite) falls back as the options say. Between Newton iterations the matrix changes little:
 /// CG preconditioned by the last LL^T factor converges in a few iterations, each two triangular
 /// solves (about 4 nnz(L) flops, memory bound) against a factorisation's F flops (compute bound).
-/// CG gets F / (40 nnz(L)) iterations (2 to 50) before the matrix is factored after all.
+/// CG gets F / (40 nnz(L)) iterations (2 to 50) before the matrix is factored after all. Across
+/// Newton iterations and time steps the matrices drift from the factored one and CG needs more
+/// iterations: the next matrix is factored (without trying CG) once a solve costs more
+/// iterations than the mean over the factor's solves so far, its factorisation counted as those
+/// F / (40 nnz(L)) iterations, which keeps that mean near its least.
 class DirectSolver {
  public:
   explicit DirectSolver(DirectSolverOptions options = {});

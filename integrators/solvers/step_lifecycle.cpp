@@ -17,7 +17,7 @@ double StepLifecycle::gradient(const Points& x, VectorX& g) {
 }
 
 void StepLifecycle::complete(double load, const NewtonResult& newton, const Points& x,
-                             const Points* v, bool settling) {
+                             const Points* v, bool settling, int time_steps) {
   StepRecord step;
   step.index = completed_;
   step.load = load;
@@ -26,6 +26,7 @@ void StepLifecycle::complete(double load, const NewtonResult& newton, const Poin
   step.linear_iterations = newton.linear_iterations;
   step.linear_solves = newton.linear_solves;
   step.factorizations = newton.factorizations;
+  step.time_steps = time_steps;
   step.residuals = newton.residuals;
   last_energy_ = gradient(x, last_gradient_);
   step.energy = last_energy_;

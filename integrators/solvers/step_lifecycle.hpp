@@ -51,9 +51,10 @@ class StepLifecycle {
   /// Completes step `load` (load factor or time [s]) at the converged x (v: velocities or null):
   /// prepare(x) and the gradient at x for reactions and energy, the modules' complete_step
   /// (internal variables move to x) and reports, the observer. `newton` gives the iteration counts
-  /// and residuals of the solve.
+  /// and residuals of the solve; `time_steps` the integrator's steps over the record's interval
+  /// (StepRecord::time_steps).
   void complete(double load, const NewtonResult& newton, const Points& x, const Points* v,
-                bool settling = false);
+                bool settling = false, int time_steps = 1);
 
   /// Sets the acceleration a scheme carries from step to step (Newmark, generalized-alpha), as
   /// it stands after the step about to be completed: a run that goes on from that step needs it.

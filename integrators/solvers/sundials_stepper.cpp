@@ -467,12 +467,13 @@ void SundialsStepper::run(Points& x, Points& v) {
     // CVODE: the Newton work of their stage (step) solves.
     NewtonResult step = data.interval;
     step.converged = true;
-    if (!implicit) step.iterations = static_cast<int>(internal - internal_before);
+    const int internal_steps = static_cast<int>(internal - internal_before);
+    if (!implicit) step.iterations = internal_steps;
     if (step.residuals.empty()) step.residuals.push_back(0.0);
     internal_before = internal;
     t_start = t;
     lifecycle_.set_load(t / options_.duration);
-    lifecycle_.complete(t, step, x, &v);
+    lifecycle_.complete(t, step, x, &v, false, internal_steps);
   }
 }
 

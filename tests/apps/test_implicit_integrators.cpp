@@ -101,18 +101,22 @@ TEST(ImplicitIntegrators, ArkodeDirkTablesConvergeAtTheirOrders) {
 
 // Runs a scene whose integrator is one of SUNDIALS' through SundialsStepper itself, for its
 // internal steps (`history`); `observer` sees the positions of every output. The end positions.
+// The step records' time steps must add up to those internal steps.
 Points run_sundials(const Scene& s, std::vector<SundialsInternalStep>& history,
                     const std::function<void(const Points&)>& observer = {}) {
   PhaseTimers timers;
   const std::unique_ptr<SceneModel> model = build_model(s, timers);
+  size_t recorded = 0;
   StepLifecycle lifecycle(model->system, model->constraints, model->lifecycle_terms(),
-                          [&](const StepRecord&, const Points& x, const Points*) {
+                          [&](const StepRecord& r, const Points& x, const Points*) {
+                            recorded += static_cast<size_t>(r.time_steps);
                             if (observer) observer(x);
                           });
   SundialsStepper stepper(lifecycle, model->lumped_mass, model->dynamic_options, model->implicit);
   Points x = s.mesh.X, v = s.initial_velocity;
   stepper.run(x, v);
   history = stepper.history();
+  EXPECT_EQ(recorded, history.size()) << "time steps in the step records";
   return x;
 }
 

@@ -94,6 +94,45 @@ TEST(LinearSolver, DirectKeptFactorStopsAtTheGivenTolerance) {
   EXPECT_TRUE(tight.factored || tight.cg_iterations > loose.cg_iterations);
 }
 
+// Matrices drifting from the factored one (the diagonal raised a little more each time, as
+// the Newton matrices of a dynamic run drift over its steps): CG on the kept factor needs more
+// iterations each time, and the next matrix is factored once a solve costs more than the mean
+// over the factor's solves, its factorisation counted as F / (40 nnz(L)) iterations. Every
+// solve meets its tolerance; the rule is replayed from the statistics and must have fired.
+TEST(LinearSolver, DirectRefactorsOnceASolveCostsMoreThanTheMean) {
+  Problem p = clamped_block(0.0, {24, 8, 8});
+  DirectSolver solver;
+  const DirectAnalysis& analysis = solver.analyse(p.A);
+  const double factor_cost = std::clamp(analysis.flops / (40 * analysis.factor_entries), 2.0, 50.0);
+  ASSERT_GT(factor_cost, 4);  // a block bulky enough for several CG iterations per factorisation
+  const double raise = 0.003 * p.A.diagonal().mean();
+  int solves = 0, rule_refactors = 0;
+  double cost = 0;
+  bool refactor = false;
+  VectorX x;
+  for (int j = 0; j < 40; ++j) {
+    const DirectSolveStats s = solver.solve(p.A, p.b, x, 1e-6);
+    ASSERT_TRUE(s.success);
+    EXPECT_LE(residual(p.A, x, p.b), 1e-6) << "solve " << j;
+    if (refactor) {
+      EXPECT_TRUE(s.factored && s.cg_iterations == 0) << "solve " << j;
+      ++rule_refactors;
+    }
+    if (s.factored) {
+      solves = 1;
+      cost = factor_cost;
+      refactor = false;
+    } else {
+      ++solves;
+      cost += s.cg_iterations;
+      refactor = s.cg_iterations * solves > cost;
+    }
+    for (Index i = 0; i < p.A.num_nodes(); ++i)
+      p.A.block(p.A.block_index(i, i)).diagonal().array() += raise;
+  }
+  EXPECT_GE(rule_refactors, 2);
+}
+
 TEST(LinearSolver, IterationCapIsHonoured) {
   const Problem p = clamped_block(0.0);
   LinearSolver s({LinearSolverKind::kGmres, 1e-12, 7, 5});
