@@ -176,11 +176,22 @@ struct Start {
 // Runs the scene's analysis from (result.x, start) through the lifecycle; a failure (a solve
 // that cannot go on, a step the results file refused, memory) is the result's message.
 void drive(const Scene& scene, SceneModel& model, StepLifecycle& lifecycle, Start start,
-           RunResult& result) {
+           RunResult& result, std::ostream& log) {
   const DynamicOptions& dyn = model.dynamic_options;
+  // A failed attempt completes no step: one line each, so that a long one shows where the time
+  // goes.
+  const auto on_failure = [&log](const FailedAttempt& f) {
+    log << format("attempt  load %.4f -> %.4f%s  failed", f.from, f.target,
+                  f.settling ? " (settle)" : "")
+        << (f.newton ? format("  newton %2d  linear %5d", f.newton->iterations,
+                              f.newton->linear_iterations)
+                     : "")
+        << ": " << f.why << format("  %.2f s\n", f.seconds);
+    log.flush();
+  };
   try {
     if (scene.analysis == Analysis::kStatic) {
-      StaticSolver(lifecycle, model.quasi_viscosity, model.static_options)
+      StaticSolver(lifecycle, model.quasi_viscosity, model.static_options, on_failure)
           .run(result.x, start.load);
     } else {
       Points& v = start.v;
@@ -438,7 +449,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   };
   StepLifecycle lifecycle(model->system, model->constraints, model->lifecycle_terms(), on_step);
   running = &lifecycle;
-  drive(scene, *model, lifecycle, from, result);
+  drive(scene, *model, lifecycle, from, result, log);
   if (pending) {
     try {
       write(pending->step, pending->x, pending->has_v ? &pending->v : nullptr);

@@ -1,5 +1,6 @@
 #include "integrators/solvers/static_solver.hpp"
 
+#include <chrono>
 #include <cmath>
 
 #include "core/decimal.hpp"
@@ -38,6 +39,14 @@ bool StaticSolver::legal_start(const Points& x, double target, Points& trial) {
 }
 
 bool StaticSolver::attempt(Points& x, Path& path, double target, bool settling) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto failed = [&](const NewtonResult* r) {
+    if (on_failure_)
+      on_failure_(
+          {path.load, target, settling, r, last_failure_,
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()});
+    return false;
+  };
   Points trial = x;
   if (options_.predictor && lifecycle_.completed() >= 1 && !settling &&
       path.load > path.previous_load) {
@@ -46,11 +55,11 @@ bool StaticSolver::attempt(Points& x, Path& path, double target, bool settling) 
   lifecycle_.constraints().impose(target, trial);
   if (viscosity_) viscosity_->set_anchor(x);
   lifecycle_.begin(x, target);
-  if (!legal_start(x, target, trial)) return false;
+  if (!legal_start(x, target, trial)) return failed(nullptr);
   NewtonResult r = newton_.solve(trial);
   if (!r.converged) {
     last_failure_ = r.failure;
-    return false;
+    return failed(&r);
   }
   path.previous = x;
   path.previous_load = path.load;

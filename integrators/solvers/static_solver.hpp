@@ -2,6 +2,9 @@
 /// Static analysis: adaptive incremental loading with a two-point predictor around Newton
 /// (LOOP1 of the paper's section 3.2), and quasi-viscous settling.
 
+#include <functional>
+#include <string>
+
 #include "integrators/forces/nodal_spring.hpp"
 #include "integrators/solvers/newton.hpp"
 #include "integrators/solvers/step_lifecycle.hpp"
@@ -24,15 +27,30 @@ struct StaticOptions {
   NewtonOptions newton;
 };
 
+/// An attempt at an increment that failed: from load factor `from` towards `target`, its Newton
+/// solve (null where no legal start was found and Newton did not run), why, and its wall time.
+/// A failed attempt completes no step, so this is a long run's only sign of it.
+struct FailedAttempt {
+  double from = 0, target = 0;
+  bool settling = false;
+  const NewtonResult* newton = nullptr;
+  std::string why;
+  double seconds = 0;
+};
+using AttemptObserver = std::function<void(const FailedAttempt&)>;
+
 /// Drives a System from the reference state to load factor 1 (and to rest, with quasi-viscosity).
 class StaticSolver {
  public:
-  /// `viscosity` is the quasi-viscosity module inside the lifecycle's System, or null.
-  StaticSolver(StepLifecycle& lifecycle, NodalSpring* viscosity, StaticOptions options)
+  /// `viscosity` is the quasi-viscosity module inside the lifecycle's System, or null;
+  /// `on_failure`, if set, is called after every failed attempt.
+  StaticSolver(StepLifecycle& lifecycle, NodalSpring* viscosity, StaticOptions options,
+               AttemptObserver on_failure = {})
       : lifecycle_(lifecycle),
         viscosity_(viscosity),
         options_(options),
-        newton_(lifecycle.system(), lifecycle.constraints(), options.newton) {}
+        newton_(lifecycle.system(), lifecycle.constraints(), options.newton),
+        on_failure_(std::move(on_failure)) {}
 
   /// Runs from x, an equilibrium at load factor `start_load` in [0, 1] (0: the reference state;
   /// more: a restart from a completed step), completing every converged increment through the
@@ -66,6 +84,7 @@ class StaticSolver {
   NodalSpring* viscosity_;
   StaticOptions options_;
   NewtonSolver newton_;
+  AttemptObserver on_failure_;
   std::string last_failure_;  ///< why the last attempt failed
 };
 

@@ -2,10 +2,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
 #include <set>
+#include <sstream>
 
 #include "apps/scene_runner.hpp"
 #include "core/mesh_generators.hpp"
@@ -162,6 +164,41 @@ TEST(StaticScenes, FailedRunKeepsCompletedIncrements) {
   EXPECT_EQ((read_step_positions(out, summary.num_steps - 1) - r.x).cwiseAbs().maxCoeff(), 0.0);
   std::filesystem::remove(out);
   std::filesystem::remove(std::filesystem::path(out).replace_extension(".xmf"));
+}
+
+// Every failed attempt prints one line (a failed attempt completes no step, so this is all a
+// long one shows): the buckling column with Newton cut to two iterations fails its first half of
+// the load and succeeds at a quarter; every attempt line starts from the last completed load and
+// aims above the next one.
+TEST(StaticScenes, EveryFailedAttemptPrintsALine) {
+  const Scene s =
+      load("buckling_column", {"solver.max_newton_iterations=2", "solver.initial_increment=0.5",
+                               "solver.max_increment=0.5", "solver.min_increment=0.1"});
+  std::ostringstream log;
+  const RunResult r = run_scene(s, RunOptions{}, log);
+  std::istringstream lines(log.str());
+  std::string line;
+  double completed = 0;
+  int attempts = 0;
+  std::vector<double> targets;
+  while (std::getline(lines, line)) {
+    double from = 0, to = 0;
+    if (std::sscanf(line.c_str(), "attempt  load %lf -> %lf  failed", &from, &to) == 2) {
+      ++attempts;
+      EXPECT_EQ(from, completed) << line;
+      EXPECT_NE(line.find("no convergence in 2 Newton iterations"), std::string::npos) << line;
+      targets.push_back(to);
+    } else if (std::sscanf(line.c_str(), "step %*d  load %lf", &to) == 1) {
+      for (double target : targets) EXPECT_GT(target, to) << line;
+      targets.clear();
+      completed = to;
+    }
+  }
+  ASSERT_FALSE(r.steps.empty());
+  EXPECT_EQ(r.steps.front().load, 0.25);
+  EXPECT_GE(attempts, 1);
+  EXPECT_NE(log.str().find("attempt  load 0.0000 -> 0.5000  failed  newton  2"), std::string::npos)
+      << log.str();
 }
 
 // Gravity ramps with the load: a bar sagging in ten increments of 0.1 is, at every step, the
