@@ -37,8 +37,8 @@ class Ranks {
 
   /// Splits the tets (#tets x 4, all of them, the same on every rank) among the ranks with
   /// PETSc's graph partitioner (MatPartitioning, PT-Scotch unless -mat_partitioning_type says
-  /// otherwise) on their dual graph (tets sharing a face). Each node then belongs to the lowest
-  /// rank among its tets'.
+  /// otherwise) on their dual graph (tets sharing a face), run by rank 0 alone and broadcast.
+  /// Each node then belongs to the lowest rank among its tets'.
   void partition(const TetIndices& tets, Index num_nodes);
   /// The rank of each tet / node (after partition()).
   const std::vector<int>& tet_owner() const { return tet_owner_; }
