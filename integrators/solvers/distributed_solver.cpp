@@ -94,6 +94,9 @@ KSP DistributedSolver::Impl::make_ksp(DistributedMethod method) const {
         petsc_check(PCFactorSetUpMatSolverType(pc), "PCFactorSetUpMatSolverType");
         petsc_check(PCFactorGetMatrix(pc, &factor), "PCFactorGetMatrix");
         petsc_check(MatMumpsSetIcntl(factor, 14, 100), "MatMumpsSetIcntl");
+        // The root node factored by MUMPS itself, not ScaLAPACK, so that INFOG(12) counts all
+        // negative pivots (run_direct reads the inertia from it).
+        petsc_check(MatMumpsSetIcntl(factor, 13, 1), "MatMumpsSetIcntl");
       }
       break;
     case DistributedMethod::kAmg:
@@ -170,22 +173,49 @@ bool DistributedSolver::Impl::run(KSP solver, int& iterations) {
   return reason > 0;
 }
 
+namespace {
+
+// The negative pivots of MUMPS' last LDL^T factorisation by `solver`: the matrix's negative
+// eigenvalues (Sylvester's law of inertia).
+PetscInt negative_pivots(KSP solver) {
+  PC pc = nullptr;
+  Mat factor = nullptr;
+  PetscInt count = 0;
+  petsc_check(KSPGetPC(solver, &pc), "KSPGetPC");
+  petsc_check(PCFactorGetMatrix(pc, &factor), "PCFactorGetMatrix");
+  petsc_check(MatMumpsGetInfog(factor, 12, &count), "MatMumpsGetInfog");
+  return count;
+}
+
+}  // namespace
+
 bool DistributedSolver::Impl::run_direct(KSP solver, int& iterations) {
-  if (run(solver, iterations)) return true;
-  // MUMPS stops at a zero pivot (a singular or indefinite matrix: deep contact, buckling). As the
-  // serial direct solver does, factor A + s diag|A| instead (each dof stiffened in proportion to
-  // its own stiffness), s from 1e-10 up a hundredfold at each failure; A is rebuilt for the next
+  if (run(solver, iterations) && negative_pivots(solver) == 0) return true;
+  // MUMPS' LDL^T solves an indefinite matrix (deep contact, buckling) exactly, where the serial
+  // direct solver's LL^T fails and it factors A + s D instead, D the diagonal of |A| floored at
+  // 1e-12 of its largest entry: so does this, with s from 1e-3 raised fourfold until the
+  // factorisation has no negative pivot (the serial solver starts from an eigenvalue estimate;
+  // the same rule otherwise, so that a distributed run takes the serial run's Newton path
+  // through indefinite systems instead of the exact Newton step). A is rebuilt for the next
   // solve anyway.
   Vec d = nullptr, step = nullptr;
   petsc_check(MatCreateVecs(A, &d, nullptr), "MatCreateVecs");
   petsc_check(VecDuplicate(d, &step), "VecDuplicate");
   petsc_check(MatGetDiagonal(A, d), "MatGetDiagonal");
   petsc_check(VecAbs(d), "VecAbs");
+  PetscReal largest = 0;
+  petsc_check(VecMax(d, nullptr, &largest), "VecMax");
+  PetscScalar* entry = nullptr;
+  PetscInt length = 0;
+  petsc_check(VecGetLocalSize(d, &length), "VecGetLocalSize");
+  petsc_check(VecGetArray(d, &entry), "VecGetArray");
+  for (PetscInt i = 0; i < length; ++i) entry[i] = std::max(entry[i], 1e-12 * largest);
+  VecRestoreArray(d, &entry);
   bool solved = false;
-  for (double s = 1e-10, applied = 0; s <= 1e2 && !solved; applied = s, s *= 100) {
+  for (double s = 1e-3, applied = 0; s < 1e3 && !solved; applied = s, s *= 4) {
     petsc_check(VecAXPBY(step, s - applied, 0.0, d), "VecAXPBY");
     petsc_check(MatDiagonalSet(A, step, ADD_VALUES), "MatDiagonalSet");
-    solved = run(solver, iterations);
+    solved = run(solver, iterations) && negative_pivots(solver) == 0;
   }
   VecDestroy(&step);
   VecDestroy(&d);
