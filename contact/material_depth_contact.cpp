@@ -66,8 +66,7 @@ void MaterialDepthContact::build_trees(const Points& x) {
   for (const Body& b : bodies_) trees_.emplace_back(body_boxes(boxes, b));
 }
 
-void MaterialDepthContact::list_candidates(const Points& x) {
-  const std::vector<Box3> boxes = tet_boxes(x, tets_);
+void MaterialDepthContact::list_candidates(const Points& x, const std::vector<Box3>& boxes) {
   for (size_t b = 0; b < bodies_.size(); ++b) trees_[b].refit(body_boxes(boxes, bodies_[b]));
   const Index n = static_cast<Index>(tris_.rows());
   const Index chunks = (n + kChunk - 1) / kChunk;
@@ -119,8 +118,8 @@ void MaterialDepthContact::begin_step(const Points& x) {
 void MaterialDepthContact::prepare(const Points& x) {
   const bool relist = listed_x_.rows() == 0 ||
                       (x - listed_x_).rowwise().squaredNorm().maxCoeff() > margin_ * margin_;
-  if (relist) list_candidates(x);
   const std::vector<Box3> boxes = tet_boxes(x, tets_);
+  if (relist) list_candidates(x, boxes);
   const Index n = static_cast<Index>(tris_.rows());
   const Index chunks = (n + kChunk - 1) / kChunk;
   std::vector<std::vector<ContactPair>> found(static_cast<size_t>(chunks));

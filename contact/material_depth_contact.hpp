@@ -104,8 +104,8 @@ class MaterialDepthContact final : public ForceModule {
   double min_area2_ = 0;
   /// Builds trees_ over the tets of each body at positions x.
   void build_trees(const Points& x);
-  /// Refits trees_ at positions x and lists every triangle's candidate tets.
-  void list_candidates(const Points& x);
+  /// Refits trees_ to the tets' boxes at positions x and lists every triangle's candidate tets.
+  void list_candidates(const Points& x, const std::vector<Box3>& boxes);
   /// Whether triangles of body a are searched against tets of body b.
   bool searched(Index a, Index b) const;
 
