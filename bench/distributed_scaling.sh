@@ -38,25 +38,21 @@ run_case() {
   ((p > 1)) && launch=("${mpirun[@]}" -n "$p")
   echo "== $name ranks $p: $*" >> "$out/log.txt"
   start=$EPOCHREALTIME
-  timeout "$limit" "${launch[@]}" "$gtime" -f "rss_kb %M" "$bin" run "$@" --out "$out/run.h5" \
-    --threads 1 > "$log" 2>&1
+  rm -f "$out/rss.txt"  # one line a process, appended by each at its end
+  timeout "$limit" "${launch[@]}" "$gtime" -a -o "$out/rss.txt" -f "%M" "$bin" run "$@" \
+    --out "$out/run.h5" --threads 1 > "$log" 2>&1
   status=$?
   wall=$(awk -v a="$start" -v b="$EPOCHREALTIME" 'BEGIN { print b - a }')
   cat "$log" >> "$out/log.txt"
-  awk -v c="$name" -v p="$p" -v t="$tets" -v s="$status" -v w="$wall" '
+  touch "$out/rss.txt"
+  awk -v c="$name" -v p="$p" -v t="$tets" -v s="$status" -v w="$wall" -v output="$log" '
     /^step/ { for (i = 1; i < NF; ++i) { if ($i == "newton") n += $(i + 1); if ($i == "linear") l += $(i + 1) } }
     /^  = force\/stiffness/ { f = $(NF - 2) } /^  = collision detection/ { d = $(NF - 2) }
     /^  = linear solve/ { ls = $(NF - 2) }
-    { # the GNU time line of every rank; lines of two ranks can run together
-      line = $0
-      while (match(line, /rss_kb [0-9]+/)) {
-        kb = substr(line, RSTART + 7, RLENGTH - 7) + 0; sum += kb; if (kb > mx) mx = kb
-        line = substr(line, RSTART + RLENGTH)
-      }
-    }
+    FILENAME != output { sum += $1; if ($1 > mx) mx = $1; next }
     END { printf "%s,%d,%d,%d,%.2f,%d,%d,%s,%s,%s,%d,%d\n", c, p, t, s, w, n, l, f + 0, d + 0, ls + 0, mx, sum }
-  ' "$log" | tee -a "$csv"
-  rm -f "$out/run.h5"
+  ' "$log" "$out/rss.txt" | tee -a "$csv"
+  rm -f "$out/run.h5" "$out/rss.txt"
 }
 
 cantilever=(apps/scenes/cantilever_gravity.json --set "bodies.0.mesh.cells=$strong_cells")
