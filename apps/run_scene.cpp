@@ -240,8 +240,8 @@ std::unique_ptr<Ranks> start_ranks(const Scene& scene, PhaseTimers& timers) {
     if (integrator != Integrator::kImplicitEuler && integrator != Integrator::kNewmark &&
         integrator != Integrator::kGeneralizedAlpha)
       refuse(
-          "the explicit and SUNDIALS integrators (symplectic_euler, arkode, arkode_dirk, "
-          "cvode_bdf), only implicit_euler, newmark and generalized_alpha");
+          "the explicit and SUNDIALS integrators (dynamic.integrator symplectic_euler, arkode, "
+          "arkode_dirk, cvode_bdf)");
     // Each rank would keep the history of its own tets only, and rank 0 writes it.
     if (std::ranges::any_of(scene.groups,
                             [](const ElasticGroup& g) { return !g.viscoelastic.empty(); }))
