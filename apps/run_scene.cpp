@@ -231,10 +231,21 @@ void drive(const Scene& scene, SceneModel& model, StepLifecycle& lifecycle, Star
 // null for a serial run. Refuses what does not run distributed yet.
 std::unique_ptr<Ranks> start_ranks(const Scene& scene, PhaseTimers& timers) {
   if (Ranks::launched() == 1) return nullptr;
-  if (scene.analysis != Analysis::kStatic) {
+  const auto refuse = [&](const std::string& what) {
     throw InputError(scene.file + ": a run on " + std::to_string(Ranks::launched()) +
-                     " processes (mpirun) takes static analyses only so far; this scene's is " +
-                     to_string(scene.analysis) + ": run it without mpirun");
+                     " processes (mpirun) does not take " + what + " yet: run it without mpirun");
+  };
+  if (scene.analysis != Analysis::kStatic) {
+    const Integrator integrator = scene.dynamic_options.integrator;
+    if (integrator != Integrator::kImplicitEuler && integrator != Integrator::kNewmark &&
+        integrator != Integrator::kGeneralizedAlpha)
+      refuse(
+          "the explicit and SUNDIALS integrators (dynamic.integrator symplectic_euler, arkode, "
+          "arkode_dirk, cvode_bdf)");
+    // Each rank would keep the history of its own tets only, and rank 0 writes it.
+    if (std::ranges::any_of(scene.groups,
+                            [](const ElasticGroup& g) { return !g.viscoelastic.empty(); }))
+      refuse("viscoelastic materials in a time-dependent analysis");
   }
   auto ranks = std::make_unique<Ranks>();
   PhaseTimers::Scope t(timers, "partition");

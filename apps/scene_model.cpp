@@ -79,8 +79,11 @@ std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers,
     if (dyn.damping.mass > 0)
       terms.damping.push_back(mass_tether("mass damping", dyn.damping.mass));
     if (dyn.damping.stiffness > 0) {
-      terms.damping.push_back(&system.add(std::make_unique<StiffnessTether>(
-          "stiffness damping", *model->elasticity, dyn.damping.stiffness)));
+      // K(x^n) of this rank's tets, as the elasticity it is taken from.
+      terms.damping.push_back(
+          &system.add(std::make_unique<StiffnessTether>("stiffness damping", *model->elasticity,
+                                                        dyn.damping.stiffness),
+                      Share::kOwnPart));
     }
   }
   if (time_dependent && !model->implicit.inertia)

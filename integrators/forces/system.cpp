@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include "integrators/solvers/ranks.hpp"
 
@@ -35,6 +36,15 @@ double System::max_step(const Points& x, const Points& dx) const {
     alpha = std::min(alpha, modules_[m]->max_step(x, dx));
   }
   return ranks_ ? ranks_->min(alpha) : alpha;
+}
+
+double System::module_energy(const ForceModule& module, const Points& x) const {
+  const auto found =
+      std::ranges::find_if(modules_, [&](const auto& m) { return m.get() == &module; });
+  if (found == modules_.end()) throw std::logic_error("System::module_energy: not a module of it");
+  const size_t m = static_cast<size_t>(found - modules_.begin());
+  const double energy = evaluates(m) ? module.evaluate(x, nullptr, nullptr) : 0.0;
+  return ranks_ ? ranks_->sum(energy) : energy;
 }
 
 void System::complete_step(const Points& x) {

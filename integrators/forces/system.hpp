@@ -55,6 +55,9 @@ class System {
   void prepare(const Points& x);
   /// Total energy; +infinity when some module finds x illegal.
   double energy(const Points& x);
+  /// The energy of `module` (one of this System's) at x; in a distributed System its parts
+  /// summed over the ranks.
+  double module_energy(const ForceModule& module, const Points& x) const;
   /// Total energy and gradient (3 * #nodes, interleaved; overwritten).
   double gradient(const Points& x, VectorX& g);
   /// Total energy, gradient and Hessian (overwritten; read it with matrix()). The pattern is

@@ -30,7 +30,7 @@ void StepLifecycle::complete(double load, const NewtonResult& newton, const Poin
   step.residuals = newton.residuals;
   last_energy_ = gradient(x, last_gradient_);
   step.energy = last_energy_;
-  for (const Tether* tether : terms_.excluded) step.energy -= tether->evaluate(x, nullptr, nullptr);
+  for (const Tether* tether : terms_.excluded) step.energy -= system_.module_energy(*tether, x);
   if (v && terms_.mass) step.kinetic_energy = terms_.mass->quadratic_form(*v);
   step.reactions = constraints_.reactions(last_gradient_);
   system_.complete_step(x);

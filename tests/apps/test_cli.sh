@@ -1,12 +1,7 @@
 #!/usr/bin/env bash
 # End-to-end checks of the depthfem command line: exit codes, the one-line error, partial results.
 # Usage: test_cli.sh PATH/TO/depthfem SOURCE_DIR
-set -u
-exe=$1
-src=$2
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
+source "$(dirname "$0")/preamble.sh"
 
 "$exe" run "$src/apps/scenes/uniaxial_block.json" --out "$tmp/ok.h5" > "$tmp/ok.log" 2>&1 || fail "uniaxial_block run exited $?"
 grep -q "^step    0" "$tmp/ok.log" || fail "no progress line"

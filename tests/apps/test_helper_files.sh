@@ -3,12 +3,7 @@
 # run, and stay valid when a write fails: planted links on the helper files' names, inputs named
 # like them, and file-size limits (ulimit -f) that cut the run at every stage of its writing.
 # Usage: test_helper_files.sh PATH/TO/depthfem SOURCE_DIR
-set -u
-exe=$1
-src=$2
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
+source "$(dirname "$0")/preamble.sh"
 scene=$src/apps/scenes/uniaxial_block.json
 
 # Links planted on every name a run used to write through (the lock, the staging file, the

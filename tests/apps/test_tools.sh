@@ -2,13 +2,8 @@
 # The Python tools on a results file holding every field: render.py lists them and colours by
 # one of each kind, refuses unknown fields and components with one line, plot_series.py plots.
 # Usage: test_tools.sh PATH/TO/depthfem SOURCE_DIR
-set -u
-exe=$1
-src=$2
+source "$(dirname "$0")/preamble.sh"
 py=/usr/bin/python3
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
 is_png() { [ "$(head -c 8 "$1" | od -An -tx1 | tr -d ' \n')" = "89504e470d0a1a0a" ]; }
 
 "$exe" run "$src/apps/scenes/bars_drop.json" --out "$tmp/bars.h5" --set dynamic.duration=0.25 \

@@ -1,10 +1,13 @@
 // System: the sum of its modules' energies, gradients and Hessians; the Hessian pattern rebuilt
 // when a module's couplings change (and only then); max_step the smallest of the modules'; an
-// illegal configuration (+infinity energy) reported whatever the other modules add.
+// illegal configuration (+infinity energy) reported whatever the other modules add; module_energy
+// one module's energy alone.
 #include <gtest/gtest.h>
 
 #include <array>
 #include <limits>
+#include <stdexcept>
+#include <tuple>
 
 #include "integrators/forces/gravity.hpp"
 #include "integrators/forces/nodal_spring.hpp"
@@ -290,6 +293,24 @@ TEST(System, InfiniteEnergyOfOneModuleIsTheTotal) {
     EXPECT_EQ(system.gradient(x, g), kInf) << "position " << position;
     EXPECT_EQ(system.hessian(x, g), kInf) << "position " << position;
   }
+}
+
+TEST(System, ModuleEnergyIsThatModulesAlone) {
+  const Points X = reference();
+  Points x = X;
+  x << 0.1, -0.2, 0.05, 1.3, 0.1, -0.1, 0.2, 0.8, 0.3, -0.1, 0.2, 1.4;
+  PhaseTimers timers;
+  System system(4, timers);
+  system.add(spring());
+  const PairSprings& springs = system.add(pairs());
+  system.add(std::make_unique<Constant>(2.5, kInf));
+  // sum k/2 |(x_j - x_i) - (X_j - X_i)|^2 over the three pairs, and nothing of the others.
+  double expected = 0;
+  for (const auto& [i, j, k] : {std::tuple{0, 1, 13.0}, {1, 2, 17.0}, {0, 3, 19.0}})
+    expected += 0.5 * k * (x.row(j) - x.row(i) - X.row(j) + X.row(i)).squaredNorm();
+  EXPECT_NEAR(system.module_energy(springs, x), expected, 1e-15 * expected);
+  const Constant outside(1.0, kInf);
+  EXPECT_THROW(system.module_energy(outside, x), std::logic_error);
 }
 
 }  // namespace
