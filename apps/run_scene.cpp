@@ -430,7 +430,9 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
     StepRecord step = done;
     if (model->contact) {
       PhaseTimers::Scope t(result.timers, "output: penetration");
-      step.penetration = deepest_penetration(mesh, x, model->contact->pairs());
+      // A distributed run's ranks each hold the pairs of their own tets: the deepest of all.
+      const double deepest = deepest_penetration(mesh, x, model->contact->pairs());
+      step.penetration = ranks ? -ranks->min(-deepest) : deepest;
     }
     if (!options.out.empty() && (step.index + 1) % scene.output_every == 0) {
       // In a distributed run every rank learns whether rank 0 could write the step, so that

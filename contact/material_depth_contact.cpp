@@ -115,15 +115,14 @@ void MaterialDepthContact::begin_step(const Points& x) {
   listed_x_.resize(0, 3);
 }
 
-void MaterialDepthContact::prepare(const Points& x) {
-  const bool relist = listed_x_.rows() == 0 ||
-                      (x - listed_x_).rowwise().squaredNorm().maxCoeff() > margin_ * margin_;
-  const std::vector<Box3> boxes = tet_boxes(x, tets_);
-  if (relist) list_candidates(x, boxes);
+std::vector<ContactPair> MaterialDepthContact::clip_listed(const Points& x,
+                                                           const std::vector<Box3>& boxes, bool own,
+                                                           Index& candidates) const {
   const Index n = static_cast<Index>(tris_.rows());
   const Index chunks = (n + kChunk - 1) / kChunk;
   std::vector<std::vector<ContactPair>> found(static_cast<size_t>(chunks));
-  std::vector<Index> candidates(static_cast<size_t>(chunks), 0);
+  std::vector<Index> tried(static_cast<size_t>(chunks), 0);
+  const bool all = !own || owned_.empty();
   tbb::parallel_for(Index(0), chunks, [&](Index c) {
     for (Index f = c * kChunk; f < std::min(n, (c + 1) * kChunk); ++f) {
       const std::array<Vec3, 3> Q = tri_corners(x, tris_, f);
@@ -131,21 +130,31 @@ void MaterialDepthContact::prepare(const Points& x) {
       for (const Vec3& q : Q) box.extend(q);
       for (Index k = listed_start_[f]; k < listed_start_[f + 1]; ++k) {
         const Index t = listed_tets_[k];
-        if (!boxes[t].intersects(box)) continue;
-        ++candidates[c];
+        if (!(all || owned_[static_cast<size_t>(t)]) || !boxes[t].intersects(box)) continue;
+        ++tried[c];
         ClipPolygon poly = clip_triangle_by_tet(tet_corners(x, tets_, t), Q);
         if (poly.size >= 3 && has_area(poly, min_area2_)) found[c].push_back({f, t, poly});
       }
     }
   });
-  std::vector<ContactPair> all;
+  std::vector<ContactPair> pairs;
+  candidates = 0;
+  for (Index c = 0; c < chunks; ++c) {
+    pairs.insert(pairs.end(), found[c].begin(), found[c].end());
+    candidates += tried[c];
+  }
+  return pairs;
+}
+
+void MaterialDepthContact::prepare(const Points& x) {
+  const bool relist = listed_x_.rows() == 0 ||
+                      (x - listed_x_).rowwise().squaredNorm().maxCoeff() > margin_ * margin_;
+  const std::vector<Box3> boxes = tet_boxes(x, tets_);
+  if (relist) list_candidates(x, boxes);
   stats_ = ContactStats{};
+  std::vector<ContactPair> all = clip_listed(x, boxes, true, stats_.candidates);
   stats_.listed = static_cast<Index>(listed_tets_.size());
   stats_.relisted = relist;
-  for (Index c = 0; c < chunks; ++c) {
-    all.insert(all.end(), found[c].begin(), found[c].end());
-    stats_.candidates += candidates[c];
-  }
   const Index n_pairs = static_cast<Index>(all.size());
   stats_.active = n_pairs;
   // Processing order: along a Morton curve through the polygons' centres, in colored chunks.
@@ -198,18 +207,11 @@ double MaterialDepthContact::pair_derivatives(const Points& x, const ContactPair
 
 double MaterialDepthContact::evaluate(const Points& x, VectorX* gradient,
                                       BlockSparseMatrix* hessian) const {
-  const auto skipped = [&](Index k) {
-    return !owned_.empty() && !owned_[static_cast<size_t>(pairs_[k].tet)];
-  };
-  if (!gradient) {
-    return schedule_.run(0.0,
-                         [&](Index k) { return skipped(k) ? 0.0 : pair_energy(x, pairs_[k]); });
-  }
+  if (!gradient) return schedule_.run(0.0, [&](Index k) { return pair_energy(x, pairs_[k]); });
   if (hessian && !schedule_.has_blocks())
     throw std::logic_error("contact: bind() the Hessian after prepare() found new pairs");
   // Each pair's derivatives are added as soon as they are computed.
   return schedule_.run(0.0, [&](Index k) {
-    if (skipped(k)) return 0.0;
     PairGradient grad;
     PairHessian hess;
     const double energy = pair_derivatives(x, pairs_[k], grad, hessian ? &hess : nullptr);
@@ -221,12 +223,18 @@ double MaterialDepthContact::evaluate(const Points& x, VectorX* gradient,
 }
 
 void MaterialDepthContact::report(const Points& x, StepRecord& step) const {
-  const Index n = static_cast<Index>(pairs_.size());
+  // A distributed run's pairs_ are this rank's; the report takes every tet's (of the list
+  // prepare() made at these positions).
+  Index candidates = 0;
+  std::vector<ContactPair> every;
+  if (!owned_.empty()) every = clip_listed(x, tet_boxes(x, tets_), false, candidates);
+  const std::vector<ContactPair>& pairs = owned_.empty() ? pairs_ : every;
+  const Index n = static_cast<Index>(pairs.size());
   std::vector<PairGradient> gradients(static_cast<size_t>(n));
   std::vector<double> energies(static_cast<size_t>(n));
   tbb::parallel_for(tbb::blocked_range<Index>(0, n, 16), [&](const tbb::blocked_range<Index>& r) {
     for (Index k = r.begin(); k < r.end(); ++k)
-      energies[k] = pair_derivatives(x, pairs_[k], gradients[k], nullptr);
+      energies[k] = pair_derivatives(x, pairs[k], gradients[k], nullptr);
   });
   ContactInterfaces::Tally tally = interfaces_.tally(step);
   step.surface.resize(static_cast<Index>(tris_.rows()));
@@ -235,7 +243,7 @@ void MaterialDepthContact::report(const Points& x, StepRecord& step) const {
   // in-plane pulls of the pieces cancel.
   std::vector<Index> by_triangle(static_cast<size_t>(n));
   std::iota(by_triangle.begin(), by_triangle.end(), Index(0));
-  std::ranges::stable_sort(by_triangle, {}, [&](Index k) { return pairs_[k].tri; });
+  std::ranges::stable_sort(by_triangle, {}, [&](Index k) { return pairs[k].tri; });
   struct Share {
     Index body;
     Vec3 force;
@@ -252,8 +260,8 @@ void MaterialDepthContact::report(const Points& x, StepRecord& step) const {
   // In a fixed order: the same sums for any number of threads.
   for (Index j = 0; j < n; ++j) {
     const Index k = by_triangle[j];
-    const ContactPair& p = pairs_[k];
-    if (j > 0 && p.tri != pairs_[by_triangle[j - 1]].tri) flush(pairs_[by_triangle[j - 1]].tri);
+    const ContactPair& p = pairs[k];
+    if (j > 0 && p.tri != pairs[by_triangle[j - 1]].tri) flush(pairs[by_triangle[j - 1]].tri);
     // A polygon with zero depth everywhere (a surface resting on another, a bonded interface)
     // touches but does not press: no force, no contact area.
     if (!(energies[k] > 0)) continue;
@@ -276,7 +284,7 @@ void MaterialDepthContact::report(const Points& x, StepRecord& step) const {
     share->moments.area += moments.area;
     share->moments.depth_integral += moments.depth_integral;
   }
-  if (n > 0) flush(pairs_[by_triangle[n - 1]].tri);
+  if (n > 0) flush(pairs[by_triangle[n - 1]].tri);
   tally.finish();
 }
 

@@ -76,8 +76,9 @@ class MaterialDepthContact final : public ForceModule {
   void report(const Points& x, StepRecord& step) const override;
   std::vector<std::string> interface_names() const override { return interfaces_.names(); }
 
-  /// In a distributed run: evaluate() integrates only the pairs of the tets marked 1 (#tets;
-  /// this rank's), while the pair search stays whole on every rank (pairs(), report()).
+  /// In a distributed run: prepare() clips, and pairs() and evaluate() hold, only the pairs of
+  /// the tets marked 1 (#tets; this rank's); the candidate list stays whole on every rank, and
+  /// report() clips every listed pair again (once a step) for the whole surface.
   void set_owned_tets(std::vector<char> owned) { owned_ = std::move(owned); }
 
   /// The active pairs of the last prepare(), in processing order.
@@ -106,6 +107,10 @@ class MaterialDepthContact final : public ForceModule {
   void build_trees(const Points& x);
   /// Refits trees_ to the tets' boxes at positions x and lists every triangle's candidate tets.
   void list_candidates(const Points& x, const std::vector<Box3>& boxes);
+  /// The listed pairs at x (tets' boxes `boxes`) whose clipped polygon has area, in triangle
+  /// order: with `own`, only those of this rank's tets. `candidates`: the pairs clipped.
+  std::vector<ContactPair> clip_listed(const Points& x, const std::vector<Box3>& boxes, bool own,
+                                       Index& candidates) const;
   /// Whether triangles of body a are searched against tets of body b.
   bool searched(Index a, Index b) const;
 
@@ -118,7 +123,7 @@ class MaterialDepthContact final : public ForceModule {
   PairSchedule schedule_;  // of pairs_: tet corners, triangle corners
   ContactStats stats_;
   ContactInterfaces interfaces_;
-  std::vector<char> owned_;  // per tet, the pairs evaluate() integrates; empty: all
+  std::vector<char> owned_;  // per tet, whether prepare() clips its pairs; empty: all
   const BlockSparseMatrix* bound_ = nullptr;
   bool pattern_changed_ = false;
 };

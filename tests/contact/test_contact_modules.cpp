@@ -229,6 +229,50 @@ TEST(MaterialDepthContact, TheCandidateListFindsWhatASearchAtThePositionsFinds) 
   EXPECT_GT(compared, 100) << "the boxes must overlap";
 }
 
+// A distributed run's ranks: each module clips only the pairs of the tets it owns, so two
+// modules owning complementary halves hold together the whole module's pairs and energy, and
+// each reports the whole surface (the forces, areas and depth integrals of every triangle).
+TEST(MaterialDepthContact, OwnedTetsSplitThePairsButNotTheReport) {
+  const Mesh m = three_boxes();
+  const ContactOptions options{.penalty = 1e5};
+  MaterialDepthContact whole(m, material_depth(m), options);
+  whole.begin_step(m.X);
+  whole.prepare(m.X);
+  StepRecord expected;
+  whole.report(m.X, expected);
+  std::set<std::pair<Index, Index>> all, split;
+  for (const ContactPair& p : whole.pairs()) all.insert({p.tri, p.tet});
+  double energy = 0;
+  for (const int half : {0, 1}) {
+    MaterialDepthContact part(m, material_depth(m), options);
+    std::vector<char> owned(static_cast<size_t>(m.num_tets()));
+    for (Index t = 0; t < m.num_tets(); ++t) owned[static_cast<size_t>(t)] = t % 2 == half;
+    part.set_owned_tets(owned);
+    part.begin_step(m.X);
+    part.prepare(m.X);
+    for (const ContactPair& p : part.pairs()) {
+      EXPECT_EQ(p.tet % 2, half);
+      EXPECT_TRUE(split.insert({p.tri, p.tet}).second) << "a pair on both halves";
+    }
+    energy += part.evaluate(m.X, nullptr, nullptr);
+    StepRecord reported;
+    part.report(m.X, reported);
+    const double scale = expected.surface.force.cwiseAbs().maxCoeff();
+    EXPECT_LE((reported.surface.force - expected.surface.force).cwiseAbs().maxCoeff(),
+              1e-12 * scale);
+    EXPECT_LE((reported.surface.area - expected.surface.area).cwiseAbs().maxCoeff(),
+              1e-12 * expected.surface.area.maxCoeff());
+    EXPECT_LE(
+        (reported.surface.depth_integral - expected.surface.depth_integral).cwiseAbs().maxCoeff(),
+        1e-12 * expected.surface.depth_integral.maxCoeff());
+  }
+  EXPECT_GT(all.size(), 100u) << "the boxes must overlap";
+  EXPECT_EQ(split, all);
+  const double total = whole.evaluate(m.X, nullptr, nullptr);
+  EXPECT_GT(total, 0);
+  EXPECT_NEAR(energy, total, 1e-12 * total);
+}
+
 // Energy, gradient and Hessian of a module at x on `threads` threads, into a matrix bound to it.
 struct Assembly {
   double energy = 0;
