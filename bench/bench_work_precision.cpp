@@ -8,12 +8,14 @@
 //
 //   build/bench/bench_work_precision [--out bench/results/work_precision.csv] [--duration 2.0]
 //                                    [--scene apps/scenes/falling_bars.json] [--all-nodes]
-//                                    [--only NAME,...] [--bdf-reference] [--reference-rtol R]
-//                                    [--set PATH=VALUE ...]
+//                                    [--only NAME,...] [--settings [M-]N] [--bdf-reference]
+//                                    [--reference-rtol R] [--set PATH=VALUE ...]
 //
 // --set overrides scene keys as in `depthfem run` (e.g. stiffer bars for a second study); --only
 // runs the integrators whose row names start with one of the given names (the references
-// always).
+// always); --settings N runs only the first N rungs of each integrator's ladder (its largest
+// steps or loosest tolerances, the cheap end) for large meshes and long runs, --settings M-N
+// rungs M to N (counted from 1).
 // Plot with bench/plot_work_precision.py. A second, independent reference (ARKODE order 5 at
 // ten times the reference's tolerance, 1e-10; with --bdf-reference ARKStep's DIRK order 4 at
 // 1e-6) is run too: its distance from the
@@ -22,6 +24,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -104,7 +107,8 @@ int main(int argc, char** argv) {
   std::string scene = std::string(DEPTHFEM_SOURCE_DIR) + "/apps/scenes/falling_bars.json";
   std::vector<std::string> only;
   bool bdf_reference = false;
-  double reference_rtol = 1e-11;  // of ARKODE's order 8 (the check: order 5 at ten times it)
+  long first_rung = 1, last_rung = 0;  // rungs run per integrator (from 1; last 0: all)
+  double reference_rtol = 1e-11;       // of ARKODE's order 8 (the check: order 5 at ten times it)
   std::vector<Override> scene_overrides;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -119,6 +123,16 @@ int main(int argc, char** argv) {
     } else if (a == "--only" && i + 1 < argc) {
       std::stringstream list(argv[++i]);
       for (std::string name; std::getline(list, name, ',');) only.push_back(name);
+    } else if (a == "--settings" && i + 1 < argc) {
+      const std::string range = argv[++i];
+      const size_t dash = range.find('-');
+      if (dash != std::string::npos) first_rung = std::stol(range.substr(0, dash));
+      last_rung = std::stol(dash == std::string::npos ? range : range.substr(dash + 1));
+      if (first_rung < 1 || last_rung < first_rung) {
+        std::cerr << "bench_work_precision: --settings wants N or M-N with 1 <= M <= N, not "
+                  << range << "\n";
+        return 2;
+      }
     } else if (a == "--reference-rtol" && i + 1 < argc) {
       reference_rtol = std::stod(argv[++i]);
     } else if (a == "--duration" && i + 1 < argc) {
@@ -127,8 +141,8 @@ int main(int argc, char** argv) {
       scene_overrides.push_back(parse_override(argv[++i]));
     } else {
       std::cerr << "usage: bench_work_precision [--out FILE.csv] [--duration SECONDS] [--scene "
-                   "SCENE.json] [--all-nodes] [--only NAME,...] [--bdf-reference] "
-                   "[--reference-rtol R] [--set PATH=VALUE ...]\n";
+                   "SCENE.json] [--all-nodes] [--only NAME,...] [--settings [M-]N] "
+                   "[--bdf-reference] [--reference-rtol R] [--set PATH=VALUE ...]\n";
       return 2;
     }
   }
@@ -181,10 +195,16 @@ int main(int argc, char** argv) {
   }
   csv << "integrator,setting,value,steps,newton_iterations,linear_solves,factorizations,wall_s,"
          "max_tip_error_m,status\n";
-  // One row: the integrator `name` run with `overrides` (skipped unless wanted).
+  // One row: the integrator `name` run with `overrides` (skipped unless wanted and within rungs
+  // first_rung to last_rung of its ladder).
+  std::map<std::string, long> rungs;
   const auto row = [&](const std::string& name, const std::string& setting, double value,
                        const std::vector<std::string>& overrides) {
-    if (!wanted(name) && name != "reference_check") return;
+    if (name != "reference_check") {
+      if (!wanted(name)) return;
+      const long rung = ++rungs[name];
+      if (rung < first_rung || (last_rung > 0 && rung > last_rung)) return;
+    }
     const Trajectory t = run_case(scene, scene_overrides, overrides);
     const double err = max_distance(t, ref);
     csv << name << "," << setting << "," << value << "," << t.steps << "," << t.newton << ","
