@@ -68,10 +68,18 @@ void MaterialDepthContact::build_trees(const Points& x) {
 
 void MaterialDepthContact::list_candidates(const Points& x, const std::vector<Box3>& boxes) {
   for (size_t b = 0; b < bodies_.size(); ++b) trees_[b].refit(body_boxes(boxes, bodies_[b]));
+  listed_ = query_candidates(x, true);
+  listed_x_ = x;
+}
+
+MaterialDepthContact::CandidateList MaterialDepthContact::query_candidates(const Points& x,
+                                                                           bool own) const {
   const Index n = static_cast<Index>(tris_.rows());
   const Index chunks = (n + kChunk - 1) / kChunk;
   std::vector<std::vector<Index>> tets(static_cast<size_t>(chunks));
-  listed_start_.assign(static_cast<size_t>(n) + 1, 0);
+  CandidateList list;
+  list.start.assign(static_cast<size_t>(n) + 1, 0);
+  const bool all = !own || owned_.empty();
   // Boxes grown by the margin each overlap where the triangle's, grown by twice it, overlaps.
   const std::vector<Box3> tri_boxes = triangle_boxes(x, tris_, 2 * margin_);
   tbb::parallel_for(Index(0), chunks, [&](Index c) {
@@ -81,21 +89,21 @@ void MaterialDepthContact::list_candidates(const Points& x, const std::vector<Bo
         if (!searched(body, other)) continue;
         trees_[other].query(tri_boxes[f], [&](Index local) {
           const Index t = bodies_[other].first_tet + local;
+          if (!(all || owned_[static_cast<size_t>(t)])) return;
           if (other == body)
             for (int a = 0; a < 4; ++a)
               for (int b = 0; b < 3; ++b)
                 if (tets_(t, a) == tris_(f, b)) return;  // shares a node: never in contact
           tets[c].push_back(t);
-          ++listed_start_[f + 1];
+          ++list.start[f + 1];
         });
       }
     }
   });
-  std::partial_sum(listed_start_.begin(), listed_start_.end(), listed_start_.begin());
-  listed_tets_.clear();
+  std::partial_sum(list.start.begin(), list.start.end(), list.start.begin());
   for (const std::vector<Index>& chunk : tets)
-    listed_tets_.insert(listed_tets_.end(), chunk.begin(), chunk.end());
-  listed_x_ = x;
+    list.tets.insert(list.tets.end(), chunk.begin(), chunk.end());
+  return list;
 }
 
 bool MaterialDepthContact::searched(Index a, Index b) const {
@@ -115,22 +123,21 @@ void MaterialDepthContact::begin_step(const Points& x) {
   listed_x_.resize(0, 3);
 }
 
-std::vector<ContactPair> MaterialDepthContact::clip_listed(const Points& x,
-                                                           const std::vector<Box3>& boxes, bool own,
-                                                           Index& candidates) const {
+std::vector<ContactPair> MaterialDepthContact::clip(const Points& x, const std::vector<Box3>& boxes,
+                                                    const CandidateList& list,
+                                                    Index& candidates) const {
   const Index n = static_cast<Index>(tris_.rows());
   const Index chunks = (n + kChunk - 1) / kChunk;
   std::vector<std::vector<ContactPair>> found(static_cast<size_t>(chunks));
   std::vector<Index> tried(static_cast<size_t>(chunks), 0);
-  const bool all = !own || owned_.empty();
   tbb::parallel_for(Index(0), chunks, [&](Index c) {
     for (Index f = c * kChunk; f < std::min(n, (c + 1) * kChunk); ++f) {
       const std::array<Vec3, 3> Q = tri_corners(x, tris_, f);
       Box3 box;
       for (const Vec3& q : Q) box.extend(q);
-      for (Index k = listed_start_[f]; k < listed_start_[f + 1]; ++k) {
-        const Index t = listed_tets_[k];
-        if (!(all || owned_[static_cast<size_t>(t)]) || !boxes[t].intersects(box)) continue;
+      for (Index k = list.start[f]; k < list.start[f + 1]; ++k) {
+        const Index t = list.tets[k];
+        if (!boxes[t].intersects(box)) continue;
         ++tried[c];
         ClipPolygon poly = clip_triangle_by_tet(tet_corners(x, tets_, t), Q);
         if (poly.size >= 3 && has_area(poly, min_area2_)) found[c].push_back({f, t, poly});
@@ -152,8 +159,8 @@ void MaterialDepthContact::prepare(const Points& x) {
   const std::vector<Box3> boxes = tet_boxes(x, tets_);
   if (relist) list_candidates(x, boxes);
   stats_ = ContactStats{};
-  std::vector<ContactPair> all = clip_listed(x, boxes, true, stats_.candidates);
-  stats_.listed = static_cast<Index>(listed_tets_.size());
+  std::vector<ContactPair> all = clip(x, boxes, listed_, stats_.candidates);
+  stats_.listed = static_cast<Index>(listed_.tets.size());
   stats_.relisted = relist;
   const Index n_pairs = static_cast<Index>(all.size());
   stats_.active = n_pairs;
@@ -223,11 +230,12 @@ double MaterialDepthContact::evaluate(const Points& x, VectorX* gradient,
 }
 
 void MaterialDepthContact::report(const Points& x, StepRecord& step) const {
-  // A distributed run's pairs_ are this rank's; the report takes every tet's (of the list
-  // prepare() made at these positions).
+  // A distributed run's pairs_ are this rank's; the report takes every tet's: those listed from
+  // the trees as prepare() last listed its own, clipped at x.
   Index candidates = 0;
   std::vector<ContactPair> every;
-  if (!owned_.empty()) every = clip_listed(x, tet_boxes(x, tets_), false, candidates);
+  if (!owned_.empty())
+    every = clip(x, tet_boxes(x, tets_), query_candidates(listed_x_, false), candidates);
   const std::vector<ContactPair>& pairs = owned_.empty() ? pairs_ : every;
   const Index n = static_cast<Index>(pairs.size());
   std::vector<PairGradient> gradients(static_cast<size_t>(n));

@@ -76,9 +76,9 @@ class MaterialDepthContact final : public ForceModule {
   void report(const Points& x, StepRecord& step) const override;
   std::vector<std::string> interface_names() const override { return interfaces_.names(); }
 
-  /// In a distributed run: prepare() clips, and pairs() and evaluate() hold, only the pairs of
-  /// the tets marked 1 (#tets; this rank's); the candidate list stays whole on every rank, and
-  /// report() clips every listed pair again (once a step) for the whole surface.
+  /// In a distributed run: prepare() lists and clips, and pairs() and evaluate() hold, only the
+  /// pairs of the tets marked 1 (#tets; this rank's); report() lists and clips every tet's
+  /// pairs again (once a step) for the whole surface.
   void set_owned_tets(std::vector<char> owned) { owned_ = std::move(owned); }
 
   /// The active pairs of the last prepare(), in processing order.
@@ -105,12 +105,21 @@ class MaterialDepthContact final : public ForceModule {
   double min_area2_ = 0;
   /// Builds trees_ over the tets of each body at positions x.
   void build_trees(const Points& x);
-  /// Refits trees_ to the tets' boxes at positions x and lists every triangle's candidate tets.
+  /// Per triangle (compressed rows), the tets whose boxes grown by the margin overlap the
+  /// triangle's grown by twice it.
+  struct CandidateList {
+    std::vector<Index> start, tets;
+  };
+  /// Refits trees_ to the tets' boxes at positions x and lists every triangle's candidate tets
+  /// (this rank's) into listed_.
   void list_candidates(const Points& x, const std::vector<Box3>& boxes);
-  /// The listed pairs at x (tets' boxes `boxes`) whose clipped polygon has area, in triangle
-  /// order: with `own`, only those of this rank's tets. `candidates`: the pairs clipped.
-  std::vector<ContactPair> clip_listed(const Points& x, const std::vector<Box3>& boxes, bool own,
-                                       Index& candidates) const;
+  /// The candidate list from trees_ as refitted, the triangles at x: with `own`, only the tets
+  /// owned_ marks.
+  CandidateList query_candidates(const Points& x, bool own) const;
+  /// The pairs of `list` at x (tets' boxes `boxes`) whose clipped polygon has area, in triangle
+  /// order. `candidates`: the pairs clipped.
+  std::vector<ContactPair> clip(const Points& x, const std::vector<Box3>& boxes,
+                                const CandidateList& list, Index& candidates) const;
   /// Whether triangles of body a are searched against tets of body b.
   bool searched(Index a, Index b) const;
 
@@ -118,12 +127,12 @@ class MaterialDepthContact final : public ForceModule {
   std::vector<AabbTree> trees_;  // per body over its tets (primitive k: tet first_tet + k)
   double margin_ = 0;            // [m] a node may move this far before the list is made anew
   Points listed_x_;              // positions at which the list was made (empty: none yet)
-  std::vector<Index> listed_start_, listed_tets_;  // per triangle (CSR): its candidate tets
+  CandidateList listed_;         // made at listed_x_
   std::vector<ContactPair> pairs_;
   PairSchedule schedule_;  // of pairs_: tet corners, triangle corners
   ContactStats stats_;
   ContactInterfaces interfaces_;
-  std::vector<char> owned_;  // per tet, whether prepare() clips its pairs; empty: all
+  std::vector<char> owned_;  // per tet, whether prepare() lists its pairs; empty: all
   const BlockSparseMatrix* bound_ = nullptr;
   bool pattern_changed_ = false;
 };
