@@ -117,6 +117,7 @@ struct DirectSolver::Impl {
   int cycle_solves = 0;
   double cycle_cost = 0;
   bool refactor = false;
+  bool shifted = false;  // the last factorisation was of a shifted matrix
   cholmod_dense *X = nullptr, *Y = nullptr, *E = nullptr;  // solve workspace
 
   explicit Impl(DirectSolverOptions o) : options(o) {
@@ -367,28 +368,40 @@ DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& 
   s.refactor = false;
   s.cycle_solves = 1;
   s.cycle_cost = s.factor_cost();
-  if (s.factorize_llt()) {
+  // A + s D, D the diagonal of |A| (floored at 1e-12 of its largest entry), with s just past the
+  // lowest eigenvalue of D^-1/2 A D^-1/2: a Lanczos estimate of it (from above, so 1.5 times
+  // its size, and at least 1e-3), raised fourfold until the factorisation succeeds. Each dof is
+  // stiffened in proportion to its own stiffness: a soft tissue beside a stiff bone or a strong
+  // penalty keeps nearly its Newton step, where a shift s I large enough for the stiff dofs
+  // would freeze it. The shifted solve is invariant under a rescaling of the dofs.
+  const bool shifts = s.options.indefinite == IndefiniteFallback::kShift;
+  VectorX d, weight;
+  double lowest = 0;
+  const auto estimate = [&] {
+    d = M.diagonal();
+    weight = d.cwiseAbs().cwiseMax(1e-12 * d.cwiseAbs().maxCoeff());
+    lowest = lowest_eigenvalue_estimate(M, weight);
+  };
+  // After a shifted factorisation the next matrix is likely indefinite too. The estimate comes
+  // first then: a Ritz value below zero proves an eigenvalue below zero (it bounds the lowest
+  // from above), so LL^T would fail, and is not tried.
+  if (shifts && s.shifted) estimate();
+  if (lowest >= 0 && s.factorize_llt()) {
+    s.shifted = false;
     s.llt_valid = true;
     s.solve_with(s.llt, b, x);
-  } else if (s.options.indefinite == IndefiniteFallback::kLdlt) {
+  } else if (!shifts) {
     if (!s.factorize_ldlt()) return stats;
     s.solve_with(s.ldlt, b, x);
     stats.ldlt = true;
   } else {
-    // A + s D, D the diagonal of |A| (floored at 1e-12 of its largest entry), with s just past
-    // the lowest eigenvalue of D^-1/2 A D^-1/2: a Lanczos estimate of it (from above, so 1.5
-    // times its size, and at least 1e-3), raised fourfold until the factorisation succeeds. Each
-    // dof is stiffened in proportion to its own stiffness: a soft tissue beside a stiff bone or a
-    // strong penalty keeps nearly its Newton step, where a shift s I large enough for the stiff
-    // dofs would freeze it. The shifted solve is invariant under a rescaling of the dofs.
-    const VectorX d = M.diagonal();
-    const VectorX weight = d.cwiseAbs().cwiseMax(1e-12 * d.cwiseAbs().maxCoeff());
-    const double lowest = lowest_eigenvalue_estimate(M, weight);
+    if (d.size() == 0) estimate();
     double shift = std::max(1e-3, -1.5 * lowest);
     while (!s.factorize_shifted(d, weight, shift)) {
       shift *= 4;
       if (!(shift < 1e3)) return stats;
     }
+    s.shifted = true;
     s.llt_valid = true;
     s.solve_with(s.llt, b, x);
     stats.shift = shift;

@@ -185,6 +185,28 @@ TEST(LinearSolver, DirectShiftsIndefiniteSystemsToADescentDirection) {
   EXPECT_GT(probe.solve(shifted, p.b, x).shift, 0.0);
 }
 
+TEST(LinearSolver, DirectSolvesAfterAShiftAsAFreshSolverWould) {
+  // After a shifted factorisation the solver estimates the lowest eigenvalue before trying LL^T
+  // and skips LL^T where the estimate is negative: the next indefinite matrix must get the shift
+  // and solution a fresh solver gives it (bitwise: the same estimate, the same factorisations),
+  // and a positive definite one after it its exact, unshifted solution.
+  const Problem first = clamped_block(2e3), second = clamped_block(2.5e3), definite = clamped_block(0);
+  DirectSolverOptions factor_always;
+  factor_always.reuse_tolerance = 0;  // no CG on the kept factor: every matrix is factored
+  DirectSolver kept(factor_always);
+  VectorX x;
+  ASSERT_GT(kept.solve(first.A, first.b, x).shift, 0.0);
+  for (const Problem* p : {&second, &definite}) {
+    DirectSolver fresh(factor_always);
+    VectorX y;
+    const DirectSolveStats a = kept.solve(p->A, p->b, x), b = fresh.solve(p->A, p->b, y);
+    ASSERT_TRUE(a.success);
+    EXPECT_EQ(a.shift, b.shift);
+    EXPECT_EQ(x, y);
+  }
+  EXPECT_LE(residual(definite.A, x, definite.b), 1e-10);  // shift 0: the exact solution
+}
+
 TEST(LinearSolver, DirectShiftIsInvariantUnderRescalingTheDofs) {
   // A stiff region beside a soft one (a bone beside soft tissue, a penalty beside both): the
   // congruence S A S with S = diag(1000 on half the nodes, 1 on the rest) has the same inertia,
