@@ -190,7 +190,8 @@ TEST(LinearSolver, DirectSolvesAfterAShiftAsAFreshSolverWould) {
   // and skips LL^T where the estimate is negative: the next indefinite matrix must get the shift
   // and solution a fresh solver gives it (bitwise: the same estimate, the same factorisations),
   // and a positive definite one after it its exact, unshifted solution.
-  const Problem first = clamped_block(2e3), second = clamped_block(2.5e3), definite = clamped_block(0);
+  const Problem first = clamped_block(2e3), second = clamped_block(2.5e3),
+                definite = clamped_block(0);
   DirectSolverOptions factor_always;
   factor_always.reuse_tolerance = 0;  // no CG on the kept factor: every matrix is factored
   DirectSolver kept(factor_always);
