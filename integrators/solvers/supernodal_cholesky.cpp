@@ -1,6 +1,10 @@
 #include "integrators/solvers/supernodal_cholesky.hpp"
 
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <atomic>
 
 #include <algorithm>
 #include <stdexcept>
@@ -86,85 +90,139 @@ SupernodalCholesky::SupernodalCholesky(const cholmod_sparse& A, cholmod_factor& 
     entry_source_[to] = source[e];
     entry_destination_[to] = destination[e];
   }
-  head_.resize(nsuper);
-  next_.resize(nsuper);
-  position_.resize(nsuper);
-  row_map_.resize(n);
-  relative_map_.resize(n);
+  schedule(L);
   fits = true;
 }
 
-bool SupernodalCholesky::factorize(const cholmod_sparse& A, cholmod_factor& L) {
+// The updates in the order of CHOLMOD's left-looking loop, found by running it on the pattern
+// alone: supernodes in order, each takes the descendants queued for it (last queued first), and a
+// descendant with rows past the supernode's columns is queued for the supernode of the next row.
+// Each supernode's sum of updates is then the one of that loop, whatever order the supernodes
+// run in.
+void SupernodalCholesky::schedule(const cholmod_factor& L) {
   const int nsuper = static_cast<int>(L.nsuper);
+  const int* super = static_cast<const int*>(L.super);
+  const int* pi = static_cast<const int*>(L.pi);
+  const int* rows = static_cast<const int*>(L.s);
+  std::vector<int> head(nsuper, -1), next(nsuper), position(nsuper);
+  parent_.assign(nsuper, -1);
+  children_.assign(nsuper, 0);
+  update_begin_.assign(1, 0);
+  updates_.clear();
+  for (int s = 0; s < nsuper; ++s) {
+    const int k2 = super[s + 1], ncol = k2 - super[s];
+    for (int d = head[s], d_next; d != -1; d = d_next) {
+      d_next = next[d];
+      const int* drows = rows + pi[d];
+      const int drow = pi[d + 1] - pi[d];
+      int past = position[d];
+      while (past < drow && drows[past] < k2) ++past;
+      updates_.push_back({d, position[d], past});
+      position[d] = past;
+      if (past < drow) {
+        const int a = super_of_column_[drows[past]];
+        next[d] = head[a];
+        head[a] = d;
+      }
+    }
+    update_begin_.push_back(updates_.size());
+    if (pi[s + 1] - pi[s] > ncol) {
+      const int a = super_of_column_[rows[pi[s] + ncol]];
+      parent_[s] = a;
+      ++children_[a];
+      position[s] = ncol;
+      next[s] = head[a];
+      head[a] = s;
+    }
+  }
+}
+
+bool SupernodalCholesky::factorize_supernode(int s, const cholmod_sparse& A, cholmod_factor& L,
+                                             Workspace& w) const {
   const int* super = static_cast<const int*>(L.super);
   const int* pi = static_cast<const int*>(L.pi);
   const int* px = static_cast<const int*>(L.px);
   const int* rows = static_cast<const int*>(L.s);
   const double* Ax = static_cast<const double*>(A.x);
   double* Lx = static_cast<double*>(L.x);
+  const int k1 = super[s], ncol = super[s + 1] - k1;
+  const int* srows = rows + pi[s];
+  const int nrow = pi[s + 1] - pi[s];
+  double* Ls = Lx + px[s];
 
-  // head_[s]: the first supernode of the list of those that still have to update s; next_[d]
-  // the one after d; position_[d]: the first of d's rows that the next update reads.
-  std::fill(head_.begin(), head_.end(), -1);
-  for (int s = 0; s < nsuper; ++s) {
-    const int k1 = super[s], k2 = super[s + 1], ncol = k2 - k1;
-    const int* srows = rows + pi[s];
-    const int nrow = pi[s + 1] - pi[s];
-    double* Ls = Lx + px[s];
+  // The columns of A.
+  std::fill(Ls, Ls + size_t(nrow) * ncol, 0.0);
+  for (size_t e = entry_begin_[s]; e < entry_begin_[s + 1]; ++e)
+    Lx[entry_destination_[e]] = Ax[entry_source_[e]];
+  for (int k = 0; k < nrow; ++k) w.row_map[srows[k]] = k;
 
-    // The columns of A.
-    std::fill(Ls, Ls + size_t(nrow) * ncol, 0.0);
-    for (size_t e = entry_begin_[s]; e < entry_begin_[s + 1]; ++e)
-      Lx[entry_destination_[e]] = Ax[entry_source_[e]];
-    for (int k = 0; k < nrow; ++k) row_map_[srows[k]] = k;
-
-    // Minus L(k1:, d) L(k1:k2, d)^T for every descendant d whose columns have rows in k1:k2.
-    for (int d = head_[s], d_next; d != -1; d = d_next) {
-      d_next = next_[d];
-      const int dcol = super[d + 1] - super[d];
-      const int* drows = rows + pi[d];
-      const int drow = pi[d + 1] - pi[d];
-      const int first = position_[d];
-      int past = first;  // d's rows first .. past-1 are columns of s
-      while (past < drow && drows[past] < k2) ++past;
-      const int m = drow - first, n = past - first;  // the update is m x n
-      if (update_.size() < size_t(m) * n) update_.resize(size_t(m) * n);
-      lower_product(m, n, dcol, 1.0, Lx + px[d] + first, drow, 0.0, update_.data(), m);
-      for (int i = 0; i < m; ++i) relative_map_[i] = row_map_[drows[first + i]];
-      const auto subtract = [&](int j) {
-        double* column = Ls + size_t(relative_map_[j]) * nrow;
-        const double* u = update_.data() + size_t(j) * m;
-        for (int i = j; i < m; ++i) column[relative_map_[i]] -= u[i];
-      };
-      if (double(m) * n < 1 << 16) {  // entries: fewer are not worth a parallel loop
-        for (int j = 0; j < n; ++j) subtract(j);
-      } else {
-        tbb::parallel_for(0, n, subtract);
-      }
-      // d's next rows belong to a later supernode: d updates that one next.
-      position_[d] = past;
-      if (past < drow) {
-        const int a = super_of_column_[drows[past]];
-        next_[d] = head_[a];
-        head_[a] = d;
-      }
-    }
-
-    const int info = cholesky_lower(ncol, Ls, nrow);
-    if (info != 0) {
-      L.minor = size_t(k1 + info - 1);
-      return false;
-    }
-    solve_right_lower_transposed(nrow - ncol, ncol, Ls, nrow, Ls + ncol, nrow);
-    if (nrow > ncol) {
-      const int a = super_of_column_[srows[ncol]];
-      position_[s] = ncol;
-      next_[s] = head_[a];
-      head_[a] = s;
+  // Minus L(k1:, d) L(k1:k2, d)^T for every descendant d whose columns have rows in k1:k2.
+  for (size_t u = update_begin_[s]; u < update_begin_[s + 1]; ++u) {
+    const auto [d, first, past] = updates_[u];
+    const int dcol = super[d + 1] - super[d];
+    const int* drows = rows + pi[d];
+    const int drow = pi[d + 1] - pi[d];
+    const int m = drow - first, n = past - first;  // the update is m x n
+    if (w.update.size() < size_t(m) * n) w.update.resize(size_t(m) * n);
+    lower_product(m, n, dcol, 1.0, Lx + px[d] + first, drow, 0.0, w.update.data(), m);
+    for (int i = 0; i < m; ++i) w.relative_map[i] = w.row_map[drows[first + i]];
+    const auto subtract = [&](int j) {
+      double* column = Ls + size_t(w.relative_map[j]) * nrow;
+      const double* v = w.update.data() + size_t(j) * m;
+      for (int i = j; i < m; ++i) column[w.relative_map[i]] -= v[i];
+    };
+    if (double(m) * n < 1 << 16) {  // entries: fewer are not worth a parallel loop
+      for (int j = 0; j < n; ++j) subtract(j);
+    } else {
+      tbb::parallel_for(0, n, subtract);
     }
   }
-  L.minor = L.n;
+
+  const int info = cholesky_lower(ncol, Ls, nrow);
+  if (info != 0) {
+    w.failed_column = k1 + info - 1;
+    return false;
+  }
+  solve_right_lower_transposed(nrow - ncol, ncol, Ls, nrow, Ls + ncol, nrow);
   return true;
+}
+
+bool SupernodalCholesky::factorize(const cholmod_sparse& A, cholmod_factor& L) {
+  const int nsuper = static_cast<int>(L.nsuper), n = static_cast<int>(L.n);
+  const int* super = static_cast<const int*>(L.super);
+  // A supernode runs once its children have (its descendants' updates are then final), on
+  // the thread that finished the last of them; the leaves start in parallel. A failed pivot
+  // stops the supernodes past its column from starting: those before it still run, so the
+  // first failing column is the one of the sequential loop.
+  std::vector<std::atomic<int>> waiting(static_cast<size_t>(nsuper));
+  std::vector<int> leaves;
+  for (int s = 0; s < nsuper; ++s) {
+    waiting[s].store(children_[s], std::memory_order_relaxed);
+    if (children_[s] == 0) leaves.push_back(s);
+  }
+  std::atomic<int> failed{n};
+  tbb::enumerable_thread_specific<Workspace> workspaces([n] { return Workspace(n); });
+  tbb::parallel_for(size_t(0), leaves.size(), [&](size_t i) {
+    Workspace& w = workspaces.local();
+    for (int s = leaves[i]; s != -1;) {
+      if (super[s] > failed.load()) return;
+      // Isolated: a thread waiting for the supernode's own parallel loops takes no other
+      // supernode, which would reuse its workspace.
+      const bool ok =
+          tbb::this_task_arena::isolate([&] { return factorize_supernode(s, A, L, w); });
+      if (!ok) {
+        for (int f = failed.load();
+             w.failed_column < f && !failed.compare_exchange_weak(f, w.failed_column);) {
+        }
+        return;
+      }
+      const int p = parent_[s];
+      if (p == -1 || waiting[p].fetch_sub(1) != 1) return;
+      s = p;
+    }
+  });
+  L.minor = size_t(failed.load());
+  return failed.load() == n;
 }
 
 }  // namespace depthfem

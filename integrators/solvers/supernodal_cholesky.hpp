@@ -11,11 +11,13 @@
 namespace depthfem {
 
 /// Fills a supernodal CHOLMOD factor L = chol(P A P^T) by CHOLMOD's own left-looking supernodal
-/// scheme (supernodes in order; each one gathers the updates of its descendants, factors its
-/// diagonal block and solves the rows below it), with the dense work done by the tiled kernels
-/// of tiled_blas.hpp. CHOLMOD's cholmod_factorize hands the same dense blocks to a threaded BLAS,
-/// whose results change with its thread count; these do not (run under SerialBlas). The
-/// factor is CHOLMOD's in every other respect: cholmod_solve2 solves with it.
+/// scheme (each supernode gathers the updates of its descendants, factors its diagonal block and
+/// solves the rows below it), with the dense work done by the tiled kernels of tiled_blas.hpp.
+/// Supernodes in separate subtrees of the elimination tree run on separate threads; each one sums
+/// its updates in the order of CHOLMOD's sequential loop. CHOLMOD's cholmod_factorize hands the
+/// same dense blocks to a threaded BLAS, whose results change with its thread count; these do
+/// not (run under SerialBlas). The factor is CHOLMOD's in every other respect: cholmod_solve2
+/// solves with it.
 class SupernodalCholesky {
  public:
   /// For the lower triangle A (stype -1, n x n, real) and L, CHOLMOD's supernodal symbolic
@@ -39,13 +41,32 @@ class SupernodalCholesky {
   SupernodalCholesky(const cholmod_sparse& A, cholmod_factor& L, cholmod_common& common,
                      bool& fits);
 
+  // One descendant's update of a supernode: rows first .. past-1 of the descendant are the
+  // supernode's columns it updates, the rows from first on those the update touches.
+  struct Update {
+    int descendant, first, past;
+  };
+  // What one thread needs for one supernode at a time.
+  struct Workspace {
+    explicit Workspace(int n) : row_map(n), relative_map(n) {}
+    std::vector<int> row_map, relative_map;  // of L's rows: in the supernode, in the update
+    std::vector<double> update;
+    int failed_column = 0;
+  };
+  // Finds the updates of every supernode and the supernodal elimination tree.
+  void schedule(const cholmod_factor& L);
+  // Supernode s of L from A and its descendants' final columns: false when a pivot is not
+  // positive (w.failed_column).
+  bool factorize_supernode(int s, const cholmod_sparse& A, cholmod_factor& L, Workspace& w) const;
+
   std::vector<int> super_of_column_;       // supernode of every column of L
   std::vector<size_t> entry_begin_;        // entries of A per supernode, nsuper + 1
   std::vector<int> entry_source_;          // position in A->x, grouped by supernode
   std::vector<size_t> entry_destination_;  // position in L->x
-  // workspace of factorize
-  std::vector<int> head_, next_, position_, row_map_, relative_map_;
-  std::vector<double> update_;
+  std::vector<size_t> update_begin_;       // updates per supernode, nsuper + 1
+  std::vector<Update> updates_;            // in the order each supernode sums them
+  std::vector<int> parent_;                // in the supernodal elimination tree (-1: a root)
+  std::vector<int> children_;              // in that tree
 };
 
 }  // namespace depthfem
