@@ -19,6 +19,13 @@ struct DistributedSolver::Impl {
   std::uint64_t version = 0;      // pattern version of this rank's part behind A (0: none)
   Mat A = nullptr;
   KSP ksp = nullptr, fallback = nullptr;
+  KSP reuse = nullptr;  // CG on the kept MUMPS factor of ksp (kDirect)
+  // The kept factor's cycle, as DirectSolver's: valid (factor_valid), its solves and their cost
+  // in CG iterations, the factorisation counted as factor_cost; refactor: the next matrix is
+  // factored without trying CG.
+  bool factor_valid = false, refactor = false;
+  int cycle_solves = 0;
+  double cycle_cost = 0, factor_cost = 2;
   Vec b = nullptr, x = nullptr, all = nullptr, coords = nullptr;
   VecScatter to_all = nullptr;
   std::vector<PetscInt> cols;      // one block row's columns
@@ -27,6 +34,8 @@ struct DistributedSolver::Impl {
   Impl(Ranks& r, DistributedSolverOptions o) : ranks(r), options(o) {}
   ~Impl() { release(); }
   void release() {
+    KSPDestroy(&reuse);
+    factor_valid = false;
     KSPDestroy(&fallback);
     KSPDestroy(&ksp);
     VecScatterDestroy(&to_all);
@@ -45,6 +54,8 @@ struct DistributedSolver::Impl {
   KSP make_ksp(DistributedMethod method) const;
   bool run(KSP solver, int& iterations);
   bool run_direct(KSP solver, int& iterations);
+  bool reuse_factor(double tolerance, int& iterations);
+  void start_cycle();
 };
 
 template <class Keep>
@@ -222,6 +233,56 @@ bool DistributedSolver::Impl::run_direct(KSP solver, int& iterations) {
   return solved;
 }
 
+// CG preconditioned by the kept factor of ksp (of an earlier matrix of this pattern, shifted or
+// not), to |b - A x| <= tolerance |b| in at most factor_cost iterations; false when it falls
+// short or meets negative curvature.
+bool DistributedSolver::Impl::reuse_factor(double tolerance, int& iterations) {
+  PC pc = nullptr;
+  petsc_check(KSPGetPC(ksp, &pc), "KSPGetPC");
+  if (!reuse) {
+    petsc_check(KSPCreate(PETSC_COMM_WORLD, &reuse), "KSPCreate");
+    petsc_check(KSPSetType(reuse, KSPCG), "KSPSetType");
+    petsc_check(KSPSetPC(reuse, pc), "KSPSetPC");
+    petsc_check(KSPSetNormType(reuse, KSP_NORM_UNPRECONDITIONED), "KSPSetNormType");
+  }
+  const int cap = static_cast<int>(factor_cost);
+  petsc_check(KSPSetTolerances(reuse, tolerance, 0.0, PETSC_DEFAULT, cap), "KSPSetTolerances");
+  // The shared preconditioner keeps its factor while CG runs on the new A.
+  petsc_check(PCSetReusePreconditioner(pc, PETSC_TRUE), "PCSetReusePreconditioner");
+  petsc_check(KSPSetOperators(reuse, A, A), "KSPSetOperators");
+  petsc_check(VecSet(x, 0.0), "VecSet");
+  petsc_check(KSPSolve(reuse, b, x), "KSPSolve");
+  petsc_check(PCSetReusePreconditioner(pc, PETSC_FALSE), "PCSetReusePreconditioner");
+  PetscInt its = 0;
+  KSPConvergedReason reason;
+  petsc_check(KSPGetIterationNumber(reuse, &its), "KSPGetIterationNumber");
+  petsc_check(KSPGetConvergedReason(reuse, &reason), "KSPGetConvergedReason");
+  iterations += static_cast<int>(its);
+  if (reason <= 0) return false;
+  ++cycle_solves;
+  cycle_cost += static_cast<double>(its);
+  refactor = static_cast<double>(its) * cycle_solves > cycle_cost;
+  return true;
+}
+
+// A new factor: its worth in CG iterations from MUMPS' flops (RINFOG(3)) against its entries
+// (INFOG(29), negative: millions), as DirectSolver::Impl::factor_cost.
+void DistributedSolver::Impl::start_cycle() {
+  PC pc = nullptr;
+  Mat factor = nullptr;
+  PetscReal flops = 0;
+  PetscInt entries = 0;
+  petsc_check(KSPGetPC(ksp, &pc), "KSPGetPC");
+  petsc_check(PCFactorGetMatrix(pc, &factor), "PCFactorGetMatrix");
+  petsc_check(MatMumpsGetRinfog(factor, 3, &flops), "MatMumpsGetRinfog");
+  petsc_check(MatMumpsGetInfog(factor, 29, &entries), "MatMumpsGetInfog");
+  const double stored = entries < 0 ? -1e6 * double(entries) : double(entries);
+  factor_cost = std::clamp(flops / (40 * std::max(stored, 1.0)), 2.0, 50.0);
+  cycle_solves = 1;
+  cycle_cost = factor_cost;
+  refactor = false;
+}
+
 DistributedSolver::DistributedSolver(Ranks& ranks, DistributedSolverOptions options)
     : impl_(std::make_unique<Impl>(ranks, options)) {
   Impl& s = *impl_;
@@ -243,7 +304,8 @@ DistributedSolver::DistributedSolver(Ranks& ranks, DistributedSolverOptions opti
 DistributedSolver::~DistributedSolver() = default;
 
 DistributedSolveStats DistributedSolver::solve(const BlockSparseMatrix& part, const VectorX& rhs,
-                                               VectorX& sol, const Points* positions) {
+                                               VectorX& sol, const Points* positions,
+                                               double tolerance) {
   const SerialBlas serial;  // PETSc's vector operations call BLAS
   Impl& s = *impl_;
   s.set_up(part);
@@ -264,7 +326,17 @@ DistributedSolveStats DistributedSolver::solve(const BlockSparseMatrix& part, co
   }
   DistributedSolveStats stats;
   if (s.options.method == DistributedMethod::kDirect) {
-    stats.converged = s.run_direct(s.ksp, stats.iterations);
+    // As DirectSolver: CG on the kept factor first, the matrix factored once CG costs more than
+    // the mean over the factor's solves.
+    if (s.factor_valid && !s.refactor &&
+        s.reuse_factor(tolerance > 0 ? tolerance : s.options.reuse_tolerance, stats.iterations)) {
+      stats.converged = true;
+    } else {
+      stats.converged = s.run_direct(s.ksp, stats.iterations);
+      stats.factored = true;
+      s.factor_valid = stats.converged && s.options.reuse_tolerance > 0;
+      if (s.factor_valid) s.start_cycle();
+    }
   } else {
     stats.converged = s.run(s.ksp, stats.iterations);
   }

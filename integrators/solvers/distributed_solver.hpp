@@ -23,6 +23,9 @@ struct DistributedSolverOptions {
   double tolerance = 0.1;  ///< GMRES and CG with Jacobi: |b - A x| <= tolerance |b|
   int max_iterations = 1000;
   int restart = 50;        ///< GMRES
+  /// kDirect: CG on the kept factor first (see DirectSolverOptions::reuse_tolerance; 0: always
+  /// factor).
+  double reuse_tolerance = 1e-3;
   AmgSolverOptions amg{};  ///< kAmg
 };
 
@@ -30,6 +33,7 @@ struct DistributedSolverOptions {
 struct DistributedSolveStats {
   int iterations = 0;  ///< Krylov iterations (1 for a direct solve)
   bool converged = false;
+  bool factored = false;  ///< kDirect: A was factored (false: CG on the kept factor was enough)
 };
 
 /// Solves A x = b where A is the sum over the ranks of each rank's part (a BlockSparseMatrix over
@@ -50,9 +54,11 @@ class DistributedSolver {
   DistributedSolver(const DistributedSolver&) = delete;
   DistributedSolver& operator=(const DistributedSolver&) = delete;
 
-  /// x = A^-1 b (x from zero); `positions` (#nodes x 3) give GAMG its rigid-body modes.
+  /// x = A^-1 b (x from zero); `positions` (#nodes x 3) give GAMG its rigid-body modes. With
+  /// kDirect, CG on the kept factor stops at |b - A x| <= tolerance |b| (0: the options'
+  /// reuse_tolerance).
   DistributedSolveStats solve(const BlockSparseMatrix& part, const VectorX& b, VectorX& x,
-                              const Points* positions);
+                              const Points* positions, double tolerance = 0);
 
  private:
   struct Impl;

@@ -45,6 +45,7 @@ void LinearSolver::distribute(Ranks& ranks) {
                              .tolerance = options_.tolerance,
                              .max_iterations = options_.max_iterations,
                              .restart = options_.restart,
+                             .reuse_tolerance = options_.direct.reuse_tolerance,
                              .amg = options_.amg};
   if (options_.kind == LinearSolverKind::kAmg) o.method = DistributedMethod::kAmg;
   if (options_.kind == LinearSolverKind::kGmres) o.method = DistributedMethod::kGmres;
@@ -57,13 +58,12 @@ LinearSolveStats LinearSolver::solve(const BlockSparseMatrix& A, const VectorX& 
   x.setZero(b.size());
   if (b.norm() == 0) return {0, 0.0, true};
   if (distributed_) {
-    const DistributedSolveStats s = distributed_->solve(A, b, x, positions);
+    const DistributedSolveStats s = distributed_->solve(A, b, x, positions, tolerance);
     return {.iterations = s.iterations,
             .relative_residual = 0,  // not computed: A is spread over the ranks
             .reached_tolerance = s.converged,
             .shift = 0,
-            .factored = options_.kind == LinearSolverKind::kAuto ||
-                        options_.kind == LinearSolverKind::kDirect};
+            .factored = s.factored};
   }
   switch (options_.kind) {
     case LinearSolverKind::kAuto:
