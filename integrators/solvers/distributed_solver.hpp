@@ -22,7 +22,7 @@ struct DistributedSolverOptions {
   DistributedMethod method = DistributedMethod::kDirect;
   double tolerance = 0.1;  ///< GMRES and CG with Jacobi: |b - A x| <= tolerance |b|
   int max_iterations = 1000;
-  int restart = 50;        ///< GMRES
+  int restart = 50;  ///< GMRES
   /// kDirect: CG on the kept factor first (see DirectSolverOptions::reuse_tolerance; 0: always
   /// factor).
   double reuse_tolerance = 1e-3;
