@@ -316,6 +316,18 @@ void print_timing(const PhaseTimers& timers, double total, std::ostream& out) {
   }
   out << format("  = %-34s %10.3f  %5.1f %%\n", "other", rest,
                 total > 0 ? 100 * rest / total : 0.0);
+  // Threads busy on average in each phase: where a second thread idles.
+  out << "CPU time (s, all threads; CPU / wall):\n";
+  double cpu_grouped[3] = {0, 0, 0};
+  for (const auto& [name, sec] : timers.phases()) {
+    const double cpu = timers.cpu_seconds(name);
+    out << format("  %-36s %10.3f  %5.2f\n", name.c_str(), cpu, sec > 0 ? cpu / sec : 0.0);
+    for (int k = 0; k < 3; ++k)
+      if (name.rfind(groups[k], 0) == 0) cpu_grouped[k] += cpu;
+  }
+  for (int k = 0; k < 3; ++k)
+    out << format("  = %-34s %10.3f  %5.2f\n", groups[k], cpu_grouped[k],
+                  grouped[k] > 0 ? cpu_grouped[k] / grouped[k] : 0.0);
 }
 
 namespace {

@@ -48,7 +48,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
 /// naming the file (and the dataset at fault) otherwise.
 StepState restart_state(const std::string& path, Index step, const Mesh& mesh, Analysis analysis);
 
-/// Prints the phase timing table of a run (seconds and share of the total).
+/// Prints the phase timing table of a run (seconds and share of the total), then each phase's CPU
+/// seconds (all threads) and CPU / wall, the threads busy in it on average.
 void print_timing(const PhaseTimers& timers, double total_seconds, std::ostream& out);
 
 }  // namespace depthfem
