@@ -16,8 +16,34 @@ void SparsityBuilder::add_clique(std::span<const Index> nodes) {
     for (Index b : nodes) pairs_.emplace_back(a, b);
 }
 
+namespace {
+
+std::atomic<std::uint64_t> last_pattern_version{0};
+
+// Rows of `count[i]` columns each, written by fill(i, first column) on both threads: the
+// offsets by a prefix sum, then the rows in parallel (each row's work is its own).
+template <class Fill>
+SparsityBuilder::Rows rows_of(const std::vector<Index>& count, Fill fill) {
+  const size_t n = count.size();
+  SparsityBuilder::Rows out{std::vector<Index>(n + 1, 0), {}};
+  size_t total = 0;
+  for (size_t i = 0; i < n; ++i) {
+    total += static_cast<size_t>(count[i]);
+    if (total > static_cast<size_t>(std::numeric_limits<Index>::max() / 9))
+      throw std::length_error("BlockSparseMatrix: more than 2^31 / 9 blocks");
+    out.row_begin[i + 1] = static_cast<Index>(total);
+  }
+  out.col.resize(total);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const auto& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) fill(i, out.col.data() + out.row_begin[i]);
+  });
+  return out;
+}
+
+}  // namespace
+
 // The pairs bucketed by row (a counting sort, linear in their number), then each row's few
-// columns sorted and deduplicated in place.
+// columns sorted and deduplicated in place, rows in parallel.
 SparsityBuilder::Rows SparsityBuilder::rows() const {
   const size_t n = static_cast<size_t>(num_nodes_);
   std::vector<size_t> bucket(n + 1, 1);  // every row holds its diagonal
@@ -28,39 +54,52 @@ SparsityBuilder::Rows SparsityBuilder::rows() const {
   std::vector<size_t> next(bucket.begin(), bucket.end() - 1);
   for (size_t i = 0; i < n; ++i) all[next[i]++] = static_cast<Index>(i);
   for (const auto& [a, b] : pairs_) all[next[static_cast<size_t>(a)]++] = b;
-  Rows out{std::vector<Index>(n + 1, 0), {}};
-  out.col.reserve(all.size());
-  for (size_t i = 0; i < n; ++i) {
-    const auto first = all.begin() + static_cast<std::ptrdiff_t>(bucket[i]),
-               last = all.begin() + static_cast<std::ptrdiff_t>(bucket[i + 1]);
-    std::sort(first, last);
-    out.col.insert(out.col.end(), first, std::unique(first, last));
-    if (out.col.size() > static_cast<size_t>(std::numeric_limits<Index>::max() / 9))
-      throw std::length_error("BlockSparseMatrix: more than 2^31 / 9 blocks");
-    out.row_begin[i + 1] = static_cast<Index>(out.col.size());
-  }
-  return out;
+  std::vector<Index> count(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const auto& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      const auto first = all.begin() + static_cast<std::ptrdiff_t>(bucket[i]),
+                 last = all.begin() + static_cast<std::ptrdiff_t>(bucket[i + 1]);
+      std::sort(first, last);
+      count[i] = static_cast<Index>(std::unique(first, last) - first);
+    }
+  });
+  return rows_of(count, [&](size_t i, Index* to) {
+    std::copy_n(all.begin() + static_cast<std::ptrdiff_t>(bucket[i]), count[i], to);
+  });
 }
-
-namespace {
-std::atomic<std::uint64_t> last_pattern_version{0};
-}  // namespace
 
 SparsityBuilder::Rows SparsityBuilder::merged(const Rows& a, const Rows& b) {
   if (a.row_begin.size() != b.row_begin.size())
     throw std::logic_error("SparsityBuilder::merged: patterns of different node counts");
   const size_t n = a.row_begin.size() - 1;
-  Rows out{std::vector<Index>(n + 1, 0), {}};
-  out.col.reserve(a.col.size() + b.col.size());
-  for (size_t i = 0; i < n; ++i) {
-    std::set_union(a.col.begin() + a.row_begin[i], a.col.begin() + a.row_begin[i + 1],
-                   b.col.begin() + b.row_begin[i], b.col.begin() + b.row_begin[i + 1],
-                   std::back_inserter(out.col));
-    if (out.col.size() > static_cast<size_t>(std::numeric_limits<Index>::max() / 9))
-      throw std::length_error("BlockSparseMatrix: more than 2^31 / 9 blocks");
-    out.row_begin[i + 1] = static_cast<Index>(out.col.size());
-  }
-  return out;
+  const auto row = [](const Rows& p, size_t i) {
+    return std::pair(p.col.begin() + p.row_begin[i], p.col.begin() + p.row_begin[i + 1]);
+  };
+  // The union's size per row: both rows' columns less those they share.
+  std::vector<Index> count(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const auto& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      auto [p, p_end] = row(a, i);
+      auto [q, q_end] = row(b, i);
+      Index shared = 0;
+      while (p != p_end && q != q_end) {
+        if (*p < *q) {
+          ++p;
+        } else if (*q < *p) {
+          ++q;
+        } else {
+          ++shared, ++p, ++q;
+        }
+      }
+      count[i] =
+          (a.row_begin[i + 1] - a.row_begin[i]) + (b.row_begin[i + 1] - b.row_begin[i]) - shared;
+    }
+  });
+  return rows_of(count, [&](size_t i, Index* to) {
+    const auto [p, p_end] = row(a, i);
+    const auto [q, q_end] = row(b, i);
+    std::set_union(p, p_end, q, q_end, to);
+  });
 }
 
 BlockSparseMatrix::BlockSparseMatrix(const SparsityBuilder& builder)
@@ -78,13 +117,15 @@ std::vector<Index> BlockSparseMatrix::block_map(const BlockSparseMatrix& other) 
   if (other.num_nodes() != num_nodes())
     throw std::logic_error("BlockSparseMatrix::block_map: patterns of different node counts");
   std::vector<Index> to(col_.size(), -1);
-  for (Index i = 0; i < num_nodes(); ++i) {
-    Index k = other.row_begin_[i];
-    for (Index m = row_begin_[i]; m < row_begin_[i + 1]; ++m) {
-      while (k < other.row_begin_[i + 1] && other.col_[k] < col_[m]) ++k;
-      if (k < other.row_begin_[i + 1] && other.col_[k] == col_[m]) to[m] = k;
+  tbb::parallel_for(tbb::blocked_range<Index>(0, num_nodes(), 256), [&](const auto& r) {
+    for (Index i = r.begin(); i < r.end(); ++i) {
+      Index k = other.row_begin_[i];
+      for (Index m = row_begin_[i]; m < row_begin_[i + 1]; ++m) {
+        while (k < other.row_begin_[i + 1] && other.col_[k] < col_[m]) ++k;
+        if (k < other.row_begin_[i + 1] && other.col_[k] == col_[m]) to[m] = k;
+      }
     }
-  }
+  });
   return to;
 }
 
