@@ -2,6 +2,7 @@
 
 #include <cholmod.h>
 
+#include "integrators/solvers/kept_factor.hpp"
 #include "integrators/solvers/supernodal_cholesky.hpp"
 #include "integrators/solvers/thread_budget.hpp"
 
@@ -110,13 +111,7 @@ struct DirectSolver::Impl {
   cholmod_factor* llt = nullptr;                    // supernodal LL^T
   std::unique_ptr<SupernodalCholesky> llt_numeric;  // fills llt
   cholmod_factor* ldlt = nullptr;                   // simplicial LDL^T, analysed on first need
-  bool llt_valid = false;  // llt holds the factor of an earlier matrix of this pattern
-  // The solves of the current factor's cycle (the factored one included) and their cost in CG
-  // iterations, the factorisation counted as factor_cost(); refactor: the next matrix is factored
-  // without trying CG (see solve).
-  int cycle_solves = 0;
-  double cycle_cost = 0;
-  bool refactor = false;
+  KeptFactor kept;       // llt, kept for the matrices of this pattern after the factored one
   bool shifted = false;  // the last factorisation was of a shifted matrix
   cholmod_dense *X = nullptr, *Y = nullptr, *E = nullptr;  // solve workspace
 
@@ -138,7 +133,7 @@ struct DirectSolver::Impl {
     cholmod_free_factor(&llt, &c);
     cholmod_free_factor(&ldlt, &c);
     version = 0;
-    llt_valid = false;
+    kept.drop();
   }
   void check(const char* what) const {
     if (c.status < CHOLMOD_OK)
@@ -160,11 +155,6 @@ struct DirectSolver::Impl {
   void solve_with(cholmod_factor* L, const VectorX& b, VectorX& x);
   bool reuse(const BlockSparseMatrix& M, const VectorX& b, VectorX& x, double tolerance,
              int& iterations);
-  // What a factorisation is worth in CG iterations on its factor: F flops against about
-  // 4 nnz(L) per iteration, ten times slower for being memory bound; 2 to 50.
-  double factor_cost() const {
-    return std::clamp(analysis.flops / (40 * analysis.factor_entries), 2.0, 50.0);
-  }
 };
 
 // Orders the graph G of the 3x3 blocks (nine times fewer edges than the scalar graph) and
@@ -219,7 +209,7 @@ bool DirectSolver::Impl::refit(const BlockSparseMatrix& M) {
   cholmod_free_factor(&ldlt, &c);
   A = next;
   llt_numeric = std::move(numeric);
-  llt_valid = false;
+  kept.drop();
   version = M.pattern_version();
   ++analysis.refitted;
   return true;
@@ -313,7 +303,7 @@ const DirectAnalysis& DirectSolver::analyse(const BlockSparseMatrix& M) {
 // Conjugate gradients preconditioned by the kept factor; false when they fall short.
 bool DirectSolver::Impl::reuse(const BlockSparseMatrix& M, const VectorX& b, VectorX& x,
                                double tolerance, int& iterations) {
-  const int cap = static_cast<int>(factor_cost());
+  const int cap = kept.max_iterations();
   x.setZero(b.size());
   VectorX r = b, z, p, Ap;
   solve_with(llt, r, z);
@@ -350,24 +340,16 @@ DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& 
     stats.success = true;
     return stats;
   }
-  if (s.llt_valid && s.options.reuse_tolerance > 0 && !s.refactor &&
+  if (s.options.reuse_tolerance > 0 && s.kept.try_cg() &&
       s.reuse(M, b, x, tolerance > 0 ? tolerance : s.options.reuse_tolerance,
               stats.cg_iterations)) {
-    // The mean cost of a solve over a factor's cycle, (factorisation + CG iterations) / solves,
-    // is least where a solve costs as much as that mean (the iterations grow as the matrices
-    // drift from the factored one): once one costs more, the next matrix is factored.
-    ++s.cycle_solves;
-    s.cycle_cost += stats.cg_iterations;
-    s.refactor = stats.cg_iterations * s.cycle_solves > s.cycle_cost;
+    s.kept.record(stats.cg_iterations);
     stats.success = x.allFinite();
     return stats;
   }
   M.scalar_values(s.pattern, static_cast<double*>(s.A->x));
   stats.factored = true;
-  s.llt_valid = false;
-  s.refactor = false;
-  s.cycle_solves = 1;
-  s.cycle_cost = s.factor_cost();
+  s.kept.drop();
   // A + s D, D the diagonal of |A| (floored at 1e-12 of its largest entry), with s just past the
   // lowest eigenvalue of D^-1/2 A D^-1/2: a Lanczos estimate of it (from above, so 1.5 times
   // its size, and at least 1e-3), raised fourfold until the factorisation succeeds. Each dof is
@@ -388,7 +370,7 @@ DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& 
   if (shifts && s.shifted) estimate();
   if (lowest >= 0 && s.factorize_llt()) {
     s.shifted = false;
-    s.llt_valid = true;
+    s.kept.start(s.analysis.flops, s.analysis.factor_entries);
     s.solve_with(s.llt, b, x);
   } else if (!shifts) {
     if (!s.factorize_ldlt()) return stats;
@@ -402,7 +384,7 @@ DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& 
       if (!(shift < 1e3)) return stats;
     }
     s.shifted = true;
-    s.llt_valid = true;
+    s.kept.start(s.analysis.flops, s.analysis.factor_entries);
     s.solve_with(s.llt, b, x);
     stats.shift = shift;
   }

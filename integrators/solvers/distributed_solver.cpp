@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "integrators/solvers/kept_factor.hpp"
 #include "integrators/solvers/petsc_session.hpp"
 #include "integrators/solvers/thread_budget.hpp"
 
@@ -20,12 +21,7 @@ struct DistributedSolver::Impl {
   Mat A = nullptr;
   KSP ksp = nullptr, fallback = nullptr;
   KSP reuse = nullptr;  // CG on the kept MUMPS factor of ksp (kDirect)
-  // The kept factor's cycle, as DirectSolver's: valid (factor_valid), its solves and their cost
-  // in CG iterations, the factorisation counted as factor_cost; refactor: the next matrix is
-  // factored without trying CG.
-  bool factor_valid = false, refactor = false;
-  int cycle_solves = 0;
-  double cycle_cost = 0, factor_cost = 2;
+  KeptFactor kept;      // ksp's MUMPS factor, kept for the matrices after the factored one
   Vec b = nullptr, x = nullptr, all = nullptr, coords = nullptr;
   VecScatter to_all = nullptr;
   std::vector<PetscInt> cols;      // one block row's columns
@@ -35,7 +31,7 @@ struct DistributedSolver::Impl {
   ~Impl() { release(); }
   void release() {
     KSPDestroy(&reuse);
-    factor_valid = false;
+    kept.drop();
     KSPDestroy(&fallback);
     KSPDestroy(&ksp);
     VecScatterDestroy(&to_all);
@@ -55,7 +51,7 @@ struct DistributedSolver::Impl {
   bool run(KSP solver, int& iterations);
   bool run_direct(KSP solver, int& iterations);
   bool reuse_factor(double tolerance, int& iterations);
-  void start_cycle();
+  void keep_factor();
 };
 
 template <class Keep>
@@ -245,7 +241,7 @@ bool DistributedSolver::Impl::reuse_factor(double tolerance, int& iterations) {
     petsc_check(KSPSetPC(reuse, pc), "KSPSetPC");
     petsc_check(KSPSetNormType(reuse, KSP_NORM_UNPRECONDITIONED), "KSPSetNormType");
   }
-  const int cap = static_cast<int>(factor_cost);
+  const int cap = kept.max_iterations();
   petsc_check(KSPSetTolerances(reuse, tolerance, 0.0, PETSC_DEFAULT, cap), "KSPSetTolerances");
   // The shared preconditioner keeps its factor while CG runs on the new A.
   petsc_check(PCSetReusePreconditioner(pc, PETSC_TRUE), "PCSetReusePreconditioner");
@@ -259,15 +255,12 @@ bool DistributedSolver::Impl::reuse_factor(double tolerance, int& iterations) {
   petsc_check(KSPGetConvergedReason(reuse, &reason), "KSPGetConvergedReason");
   iterations += static_cast<int>(its);
   if (reason <= 0) return false;
-  ++cycle_solves;
-  cycle_cost += static_cast<double>(its);
-  refactor = static_cast<double>(its) * cycle_solves > cycle_cost;
+  kept.record(static_cast<int>(its));
   return true;
 }
 
-// A new factor: its worth in CG iterations from MUMPS' flops (RINFOG(3)) against its entries
-// (INFOG(29), negative: millions), as DirectSolver::Impl::factor_cost.
-void DistributedSolver::Impl::start_cycle() {
+// Keeps a new factor, with MUMPS' flops (RINFOG(3)) and entries (INFOG(29), negative: millions).
+void DistributedSolver::Impl::keep_factor() {
   PC pc = nullptr;
   Mat factor = nullptr;
   PetscReal flops = 0;
@@ -276,11 +269,7 @@ void DistributedSolver::Impl::start_cycle() {
   petsc_check(PCFactorGetMatrix(pc, &factor), "PCFactorGetMatrix");
   petsc_check(MatMumpsGetRinfog(factor, 3, &flops), "MatMumpsGetRinfog");
   petsc_check(MatMumpsGetInfog(factor, 29, &entries), "MatMumpsGetInfog");
-  const double stored = entries < 0 ? -1e6 * double(entries) : double(entries);
-  factor_cost = std::clamp(flops / (40 * std::max(stored, 1.0)), 2.0, 50.0);
-  cycle_solves = 1;
-  cycle_cost = factor_cost;
-  refactor = false;
+  kept.start(flops, entries < 0 ? -1e6 * double(entries) : double(entries));
 }
 
 DistributedSolver::DistributedSolver(Ranks& ranks, DistributedSolverOptions options)
@@ -328,14 +317,16 @@ DistributedSolveStats DistributedSolver::solve(const BlockSparseMatrix& part, co
   if (s.options.method == DistributedMethod::kDirect) {
     // As DirectSolver: CG on the kept factor first, the matrix factored once CG costs more than
     // the mean over the factor's solves.
-    if (s.factor_valid && !s.refactor &&
+    if (s.options.reuse_tolerance > 0 && s.kept.try_cg() &&
         s.reuse_factor(tolerance > 0 ? tolerance : s.options.reuse_tolerance, stats.iterations)) {
       stats.converged = true;
     } else {
       stats.converged = s.run_direct(s.ksp, stats.iterations);
       stats.factored = true;
-      s.factor_valid = stats.converged && s.options.reuse_tolerance > 0;
-      if (s.factor_valid) s.start_cycle();
+      if (stats.converged)
+        s.keep_factor();
+      else
+        s.kept.drop();
     }
   } else {
     stats.converged = s.run(s.ksp, stats.iterations);
