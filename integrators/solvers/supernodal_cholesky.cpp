@@ -1,12 +1,10 @@
 #include "integrators/solvers/supernodal_cholesky.hpp"
 
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include <atomic>
-
 #include <algorithm>
+#include <atomic>
 #include <stdexcept>
 #include <string>
 
@@ -201,9 +199,10 @@ bool SupernodalCholesky::factorize(const cholmod_sparse& A, cholmod_factor& L) {
     if (children_[s] == 0) leaves.push_back(s);
   }
   std::atomic<int> failed{n};
-  tbb::enumerable_thread_specific<Workspace> workspaces([n] { return Workspace(n); });
   tbb::parallel_for(size_t(0), leaves.size(), [&](size_t i) {
-    Workspace& w = workspaces.local();
+    Workspace& w = workspaces_.local();
+    w.row_map.resize(size_t(n));
+    w.relative_map.resize(size_t(n));
     for (int s = leaves[i]; s != -1;) {
       if (super[s] > failed.load()) return;
       // Isolated: a thread waiting for the supernode's own parallel loops takes no other

@@ -3,6 +3,7 @@
 /// of threads.
 
 #include <cholmod.h>
+#include <tbb/enumerable_thread_specific.h>
 
 #include <cstddef>
 #include <memory>
@@ -46,10 +47,9 @@ class SupernodalCholesky {
   struct Update {
     int descendant, first, past;
   };
-  // What one thread needs for one supernode at a time.
+  // What one thread needs for one supernode at a time, kept between factorisations.
   struct Workspace {
-    explicit Workspace(int n) : row_map(n), relative_map(n) {}
-    std::vector<int> row_map, relative_map;  // of L's rows: in the supernode, in the update
+    std::vector<int> row_map, relative_map;  // of L's rows (n): in the supernode, in the update
     std::vector<double> update;
     int failed_column = 0;
   };
@@ -67,6 +67,7 @@ class SupernodalCholesky {
   std::vector<Update> updates_;            // in the order each supernode sums them
   std::vector<int> parent_;                // in the supernodal elimination tree (-1: a root)
   std::vector<int> children_;              // in that tree
+  tbb::enumerable_thread_specific<Workspace> workspaces_;
 };
 
 }  // namespace depthfem
