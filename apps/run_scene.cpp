@@ -242,10 +242,6 @@ std::unique_ptr<Ranks> start_ranks(const Scene& scene, PhaseTimers& timers) {
       refuse(
           "the explicit and SUNDIALS integrators (dynamic.integrator symplectic_euler, arkode, "
           "arkode_dirk, cvode_bdf)");
-    // Each rank would keep the history of its own tets only, and rank 0 writes it.
-    if (std::ranges::any_of(scene.groups,
-                            [](const ElasticGroup& g) { return !g.viscoelastic.empty(); }))
-      refuse("viscoelastic materials in a time-dependent analysis");
   }
   auto ranks = std::make_unique<Ranks>();
   PhaseTimers::Scope t(timers, "partition");
@@ -408,7 +404,34 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   // as the last completed step left them).
   const RestartLayout layout = restart_layout(scene, *model);
   const StepLifecycle* running = nullptr;  // the run's lifecycle, set before the run
-  const auto write = [&](const StepRecord& step, const Points& x, const Points* v) {
+  // The viscoelastic history's fields of a step, per tet: each rank holds its own tets' rows
+  // (zero elsewhere), summed over the ranks into the whole field on every rank. Every rank
+  // calls it for every step written, rank 0 alone writes.
+  struct HistoryFields {
+    SymmetricColumns viscous_stress;
+    Eigen::MatrixXd history;
+  };
+  const auto history_fields = [&](const Points& x) {
+    HistoryFields out;
+    const auto whole = [&](auto& rows) {
+      if (!ranks) return;
+      VectorX v = rows.reshaped();
+      ranks->sum(v);
+      rows = v.reshaped(rows.rows(), rows.cols());
+    };
+    if (fields.viscous) {
+      PhaseTimers::Scope t(result.timers, "output: element fields");
+      out.viscous_stress = model->elasticity->viscous_stress(x);
+      whole(out.viscous_stress);
+    }
+    if (layout.history_columns > 0) {
+      out.history = model->elasticity->history_state();
+      whole(out.history);
+    }
+    return out;
+  };
+  const auto write = [&](const StepRecord& step, const Points& x, const Points* v,
+                         HistoryFields history) {
     ElementFields elements;
     if (fields.stress || fields.strain) {
       PhaseTimers::Scope t(result.timers, "output: element fields");
@@ -417,19 +440,17 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
       elements = element_fields(mesh.X, mesh.tets, scene.groups, x, {fields.stress, fields.strain},
                                 &pressure);
     }
-    if (fields.viscous) {
-      PhaseTimers::Scope t(result.timers, "output: element fields");
-      elements.viscous_stress = model->elasticity->viscous_stress(x);
-    }
+    elements.viscous_stress = std::move(history.viscous_stress);
     RestartRecord record;
     if (layout.acceleration) record.acceleration = running->acceleration();
     if (layout.force) record.force = as_points(running->last_gradient());
-    if (layout.history_columns > 0) record.history = model->elasticity->history_state();
+    record.history = std::move(history.history);
     PhaseTimers::Scope t(result.timers, "output: results file");
     file->append_step(step, x, v, &elements, layout.empty() ? nullptr : &record);
     file->write_timing(result.timers.phases());  // a run killed later keeps its timing so far
   };
-  // The last completed step not written (output every N > 1 steps), written when the run ends.
+  // The last completed step not written (output every N > 1 steps), written when the run ends;
+  // kept on every rank of a distributed run (each adds its part of the history fields).
   struct Pending {
     StepRecord step;
     Points x, v;
@@ -446,12 +467,16 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
       const double deepest = deepest_penetration(mesh, x, model->contact->pairs());
       step.penetration = ranks ? -ranks->min(-deepest) : deepest;
     }
+    // Each rank's viscoelastic history dissipates in its own tets.
+    if (ranks && step.dissipated_energy)
+      step.dissipated_energy = ranks->sum(*step.dissipated_energy);
     if (!options.out.empty() && (step.index + 1) % scene.output_every == 0) {
       // In a distributed run every rank learns whether rank 0 could write the step, so that
       // all stop together.
       std::string failure;
+      HistoryFields history = history_fields(x);
       try {
-        if (file) write(step, x, v);
+        if (file) write(step, x, v, std::move(history));
       } catch (const InputError& e) {
         if (!ranks) throw;
         failure = e.what();
@@ -459,7 +484,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
       if (ranks && ranks->sum(failure.empty() ? 0.0 : 1.0) > 0)
         throw InputError(failure.empty() ? "rank 0 could not write the results file" : failure);
       pending.reset();
-    } else if (file) {
+    } else if (!options.out.empty()) {
       pending = Pending{step, x, v ? *v : Points(), v != nullptr};
     }
     log << format("step %4d  %s %.4f%s  newton %2d  linear %5d  residual %.3e  energy % .6e",
@@ -476,8 +501,11 @@ RunResult run_scene(const Scene& scene, const RunOptions& options, std::ostream&
   running = &lifecycle;
   drive(scene, *model, lifecycle, from, result, log);
   if (pending) {
+    HistoryFields history = history_fields(pending->x);
     try {
-      write(pending->step, pending->x, pending->has_v ? &pending->v : nullptr);
+      if (file)
+        write(pending->step, pending->x, pending->has_v ? &pending->v : nullptr,
+              std::move(history));
     } catch (const InputError& e) {  // a full disk, a file-size limit
       result.message += (result.message.empty() ? "" : "; then ") + std::string(e.what());
       result.success = false;
