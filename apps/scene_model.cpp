@@ -98,14 +98,17 @@ std::unique_ptr<SceneModel> build_model(const Scene& scene, PhaseTimers& timers,
       PhaseTimers::Scope t(timers, "collision detection: material depth");
       model->depth = material_depth(mesh);
     }
-    auto contact =
-        std::make_unique<MaterialDepthContact>(mesh, model->depth, scene.contact_options);
+    ContactPart part;
     if (ranks) {
-      std::vector<char> owned(static_cast<size_t>(mesh.num_tets()));
+      part.owned.resize(static_cast<size_t>(mesh.num_tets()));
       for (Index t = 0; t < mesh.num_tets(); ++t)
-        owned[static_cast<size_t>(t)] = ranks->owns_tet(t);
-      contact->set_owned_tets(std::move(owned));
+        part.owned[static_cast<size_t>(t)] = ranks->owns_tet(t);
+      part.concatenate = [ranks](const std::vector<double>& mine) {
+        return ranks->concatenate(mine);
+      };
     }
+    auto contact = std::make_unique<MaterialDepthContact>(mesh, model->depth, scene.contact_options,
+                                                          std::move(part));
     model->contact = &system.add(std::move(contact), Share::kOwnPart);
   } else if (scene.contact == ContactModel::kNodeToSurface) {
     system.add(std::make_unique<NodeToSurfaceContact>(mesh, scene.contact_options.penalty));

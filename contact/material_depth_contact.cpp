@@ -37,7 +37,8 @@ bool has_area(const ClipPolygon& poly, double min_area2) {
 }
 }  // namespace
 
-MaterialDepthContact::MaterialDepthContact(const Mesh& mesh, VectorX depth, ContactOptions options)
+MaterialDepthContact::MaterialDepthContact(const Mesh& mesh, VectorX depth, ContactOptions options,
+                                           ContactPart part)
     : tets_(mesh.tets),
       tris_(mesh.tris),
       tet_body_(mesh.tet_body),
@@ -45,41 +46,40 @@ MaterialDepthContact::MaterialDepthContact(const Mesh& mesh, VectorX depth, Cont
       depth_(std::move(depth)),
       options_(options),
       bodies_(mesh.bodies),
-      interfaces_(mesh.bodies, options.self_contact) {
+      interfaces_(mesh.bodies, options.self_contact),
+      part_(std::move(part)) {
   // Sub-triangles with area below 1e-12 of a typical element face count as degenerate.
   const double h = mean_edge_length(mesh.X, mesh.tets);
   min_area2_ = std::pow(1e-12 * h * h, 2);
   margin_ = options_.list_margin * h;
+  for (const Body& b : bodies_) {
+    std::vector<Index>& own = tree_tets_.emplace_back();
+    for (Index t = b.first_tet; t < b.first_tet + b.num_tets; ++t)
+      if (part_.owned.empty() || part_.owned[static_cast<size_t>(t)]) own.push_back(t);
+  }
   build_trees(mesh.X);
 }
 
-namespace {
-std::span<const Box3> body_boxes(const std::vector<Box3>& boxes, const Body& b) {
-  return std::span(boxes).subspan(static_cast<size_t>(b.first_tet),
-                                  static_cast<size_t>(b.num_tets));
+std::vector<Box3> MaterialDepthContact::tree_boxes(const std::vector<Box3>& boxes, size_t b) const {
+  std::vector<Box3> out(tree_tets_[b].size());
+  for (size_t k = 0; k < out.size(); ++k) out[k] = boxes[static_cast<size_t>(tree_tets_[b][k])];
+  return out;
 }
-}  // namespace
 
 void MaterialDepthContact::build_trees(const Points& x) {
   const std::vector<Box3> boxes = tet_boxes(x, tets_);
   trees_.clear();
-  for (const Body& b : bodies_) trees_.emplace_back(body_boxes(boxes, b));
+  for (size_t b = 0; b < bodies_.size(); ++b) trees_.emplace_back(tree_boxes(boxes, b));
 }
 
 void MaterialDepthContact::list_candidates(const Points& x, const std::vector<Box3>& boxes) {
-  for (size_t b = 0; b < bodies_.size(); ++b) trees_[b].refit(body_boxes(boxes, bodies_[b]));
-  listed_ = query_candidates(x, true);
-  listed_x_ = x;
-}
-
-MaterialDepthContact::CandidateList MaterialDepthContact::query_candidates(const Points& x,
-                                                                           bool own) const {
+  for (size_t b = 0; b < bodies_.size(); ++b) trees_[b].refit(tree_boxes(boxes, b));
   const Index n = static_cast<Index>(tris_.rows());
   const Index chunks = (n + kChunk - 1) / kChunk;
   std::vector<std::vector<Index>> tets(static_cast<size_t>(chunks));
-  CandidateList list;
+  CandidateList& list = listed_;
   list.start.assign(static_cast<size_t>(n) + 1, 0);
-  const bool all = !own || owned_.empty();
+  list.tets.clear();
   // Boxes grown by the margin each overlap where the triangle's, grown by twice it, overlaps.
   const std::vector<Box3> tri_boxes = triangle_boxes(x, tris_, 2 * margin_);
   tbb::parallel_for(Index(0), chunks, [&](Index c) {
@@ -88,8 +88,7 @@ MaterialDepthContact::CandidateList MaterialDepthContact::query_candidates(const
       for (Index other = 0; other < static_cast<Index>(bodies_.size()); ++other) {
         if (!searched(body, other)) continue;
         trees_[other].query(tri_boxes[f], [&](Index local) {
-          const Index t = bodies_[other].first_tet + local;
-          if (!(all || owned_[static_cast<size_t>(t)])) return;
+          const Index t = tree_tets_[static_cast<size_t>(other)][static_cast<size_t>(local)];
           if (other == body)
             for (int a = 0; a < 4; ++a)
               for (int b = 0; b < 3; ++b)
@@ -103,7 +102,7 @@ MaterialDepthContact::CandidateList MaterialDepthContact::query_candidates(const
   std::partial_sum(list.start.begin(), list.start.end(), list.start.begin());
   for (const std::vector<Index>& chunk : tets)
     list.tets.insert(list.tets.end(), chunk.begin(), chunk.end());
-  return list;
+  listed_x_ = x;
 }
 
 bool MaterialDepthContact::searched(Index a, Index b) const {
@@ -229,47 +228,24 @@ double MaterialDepthContact::evaluate(const Points& x, VectorX* gradient,
   });
 }
 
-void MaterialDepthContact::report(const Points& x, StepRecord& step) const {
-  // A distributed run's pairs_ are this rank's; the report takes every tet's: those listed from
-  // the trees as prepare() last listed its own, clipped at x.
-  Index candidates = 0;
-  std::vector<ContactPair> every;
-  if (!owned_.empty())
-    every = clip(x, tet_boxes(x, tets_), query_candidates(listed_x_, false), candidates);
-  const std::vector<ContactPair>& pairs = owned_.empty() ? pairs_ : every;
-  const Index n = static_cast<Index>(pairs.size());
+std::vector<ContactShare> MaterialDepthContact::shares(const Points& x) const {
+  const Index n = static_cast<Index>(pairs_.size());
   std::vector<PairGradient> gradients(static_cast<size_t>(n));
   std::vector<double> energies(static_cast<size_t>(n));
   tbb::parallel_for(tbb::blocked_range<Index>(0, n, 16), [&](const tbb::blocked_range<Index>& r) {
     for (Index k = r.begin(); k < r.end(); ++k)
-      energies[k] = pair_derivatives(x, pairs[k], gradients[k], nullptr);
+      energies[k] = pair_derivatives(x, pairs_[k], gradients[k], nullptr);
   });
-  ContactInterfaces::Tally tally = interfaces_.tally(step);
-  step.surface.resize(static_cast<Index>(tris_.rows()));
   // A triangle's pairs, taken together (by triangle, then in processing order), are netted per
   // body the triangle enters, so that splitting a triangle among tets adds no force: the
   // in-plane pulls of the pieces cancel.
   std::vector<Index> by_triangle(static_cast<size_t>(n));
   std::iota(by_triangle.begin(), by_triangle.end(), Index(0));
-  std::ranges::stable_sort(by_triangle, {}, [&](Index k) { return pairs[k].tri; });
-  struct Share {
-    Index body;
-    Vec3 force;
-    PolygonMoments moments;
-  };
-  std::vector<Share> shares;
-  const auto flush = [&](Index tri) {
-    for (const Share& s : shares) {
-      add_to_surface(step.surface, tri, s.force, s.moments);
-      tally.add(tri_body_(tri), s.body, s.force, s.moments.area);
-    }
-    shares.clear();
-  };
-  // In a fixed order: the same sums for any number of threads.
-  for (Index j = 0; j < n; ++j) {
-    const Index k = by_triangle[j];
-    const ContactPair& p = pairs[k];
-    if (j > 0 && p.tri != pairs[by_triangle[j - 1]].tri) flush(pairs[by_triangle[j - 1]].tri);
+  std::ranges::stable_sort(by_triangle, {}, [&](Index k) { return pairs_[k].tri; });
+  std::vector<ContactShare> out;
+  size_t first = 0;  // the current triangle's first share in out
+  for (const Index k : by_triangle) {
+    const ContactPair& p = pairs_[k];
     // A polygon with zero depth everywhere (a surface resting on another, a bonded interface)
     // touches but does not press: no force, no contact area.
     if (!(energies[k] > 0)) continue;
@@ -284,16 +260,67 @@ void MaterialDepthContact::report(const Points& x, StepRecord& step) const {
     for (int j = 0; j < p.polygon.size; ++j)
       G[j] = g[0] + slope.dot(make_point<double>(p.polygon.x[j], 0) - P[0]);
     const PolygonMoments moments = polygon_moments(p.polygon, G);
+    if (first == out.size() || out[first].tri != p.tri) first = out.size();
     const Index body = tet_body_(p.tet);
-    auto share =
-        std::find_if(shares.begin(), shares.end(), [&](const Share& s) { return s.body == body; });
-    if (share == shares.end()) share = shares.insert(shares.end(), {body, Vec3::Zero(), {}});
+    auto share = std::find_if(out.begin() + static_cast<std::ptrdiff_t>(first), out.end(),
+                              [&](const ContactShare& s) { return s.body == body; });
+    if (share == out.end()) share = out.insert(out.end(), {.tri = p.tri, .body = body});
     share->force += on_triangle;
-    share->moments.area += moments.area;
-    share->moments.depth_integral += moments.depth_integral;
+    share->area += moments.area;
+    share->depth_integral += moments.depth_integral;
   }
-  if (n > 0) flush(pairs[by_triangle[n - 1]].tri);
+  return out;
+}
+
+std::vector<ContactShare> MaterialDepthContact::merge(std::span<const ContactShare> shares) {
+  std::vector<size_t> order(shares.size());
+  std::iota(order.begin(), order.end(), size_t(0));
+  std::ranges::stable_sort(order, {}, [&](size_t k) { return shares[k].tri; });
+  std::vector<ContactShare> out;
+  size_t first = 0;
+  for (const size_t k : order) {
+    const ContactShare& s = shares[k];
+    if (first == out.size() || out[first].tri != s.tri) first = out.size();
+    auto to = std::find_if(out.begin() + static_cast<std::ptrdiff_t>(first), out.end(),
+                           [&](const ContactShare& o) { return o.body == s.body; });
+    if (to == out.end()) {
+      out.push_back(s);
+    } else {
+      to->force += s.force;
+      to->area += s.area;
+      to->depth_integral += s.depth_integral;
+    }
+  }
+  return out;
+}
+
+void MaterialDepthContact::report_shares(std::span<const ContactShare> shares,
+                                         StepRecord& step) const {
+  ContactInterfaces::Tally tally = interfaces_.tally(step);
+  step.surface.resize(static_cast<Index>(tris_.rows()));
+  for (const ContactShare& s : shares) {
+    add_to_surface(step.surface, s.tri, s.force, {s.area, s.depth_integral});
+    tally.add(tri_body_(s.tri), s.body, s.force, s.area);
+  }
   tally.finish();
+}
+
+void MaterialDepthContact::report(const Points& x, StepRecord& step) const {
+  std::vector<ContactShare> own = shares(x);
+  if (!part_.concatenate) return report_shares(own, step);
+  // A distributed run's pairs are its own tets': every rank's shares, merged.
+  std::vector<double> values;
+  values.reserve(7 * own.size());
+  for (const ContactShare& s : own)
+    values.insert(values.end(), {double(s.tri), double(s.body), s.force.x(), s.force.y(),
+                                 s.force.z(), s.area, s.depth_integral});
+  const std::vector<double> all = part_.concatenate(values);
+  std::vector<ContactShare> every(all.size() / 7);
+  for (size_t k = 0; k < every.size(); ++k) {
+    const double* v = all.data() + 7 * k;
+    every[k] = {Index(v[0]), Index(v[1]), Vec3(v[2], v[3], v[4]), v[5], v[6]};
+  }
+  report_shares(merge(every), step);
 }
 
 }  // namespace depthfem

@@ -6,6 +6,8 @@
 /// they exert no force on an unknown. Nor are the interfaces a scene excludes (ContactOptions).
 
 #include <array>
+#include <functional>
+#include <span>
 #include <vector>
 
 #include "contact/aabb_tree.hpp"
@@ -36,6 +38,24 @@ struct ContactPair {
   ClipPolygon polygon;
 };
 
+/// A triangle's net force from the pairs it forms with the tets of one body, with the area and
+/// depth integral of those pairs' polygons: what report() writes for the triangle.
+struct ContactShare {
+  Index tri = 0, body = 0;
+  Vec3 force = Vec3::Zero();  ///< [N] on the triangle's body
+  double area = 0;            ///< [m^2]
+  double depth_integral = 0;  ///< [m^3]
+};
+
+/// A distributed run's part of the contact: the trees hold, prepare() lists and clips, and
+/// pairs() and evaluate() hold only the tets `owned` marks 1 (#tets; this rank's) and their
+/// pairs; report() merges every rank's shares, which `concatenate` brings together.
+struct ContactPart {
+  std::vector<char> owned;
+  /// Every rank's values (7 per share) one after another, rank 0's first, on every rank.
+  std::function<std::vector<double>(const std::vector<double>&)> concatenate;
+};
+
 /// How many pairs the last prepare() examined and kept.
 struct ContactStats {
   Index candidates = 0;   ///< triangle-tet pairs whose boxes overlap
@@ -57,8 +77,9 @@ struct ContactStats {
 /// number of threads.
 class MaterialDepthContact final : public ForceModule {
  public:
-  /// `depth` per node [m] (material_depth(mesh)).
-  MaterialDepthContact(const Mesh& mesh, VectorX depth, ContactOptions options);
+  /// `depth` per node [m] (material_depth(mesh)); `part`: a distributed run's (empty: all).
+  MaterialDepthContact(const Mesh& mesh, VectorX depth, ContactOptions options,
+                       ContactPart part = {});
 
   std::string name() const override { return "contact"; }
   void begin_step(const Points& x) override;
@@ -76,10 +97,14 @@ class MaterialDepthContact final : public ForceModule {
   void report(const Points& x, StepRecord& step) const override;
   std::vector<std::string> interface_names() const override { return interfaces_.names(); }
 
-  /// In a distributed run: prepare() lists and clips, and pairs() and evaluate() hold, only the
-  /// pairs of the tets marked 1 (#tets; this rank's); report() lists and clips every tet's
-  /// pairs again (once a step) for the whole surface.
-  void set_owned_tets(std::vector<char> owned) { owned_ = std::move(owned); }
+  /// The shares of pairs() at x, by triangle, the bodies of a triangle in the order its first
+  /// pair with each comes.
+  std::vector<ContactShare> shares(const Points& x) const;
+  /// Shares of several ranks, one after another, merged: by triangle, the same (triangle, body)
+  /// summed in the order they come.
+  static std::vector<ContactShare> merge(std::span<const ContactShare> shares);
+  /// The interface rows and step.surface from the shares of every pair.
+  void report_shares(std::span<const ContactShare> shares, StepRecord& step) const;
 
   /// The active pairs of the last prepare(), in processing order.
   const std::vector<ContactPair>& pairs() const { return pairs_; }
@@ -103,19 +128,18 @@ class MaterialDepthContact final : public ForceModule {
   VectorX depth_;
   ContactOptions options_;
   double min_area2_ = 0;
-  /// Builds trees_ over the tets of each body at positions x.
+  /// Builds trees_ over the (owned) tets of each body at positions x.
   void build_trees(const Points& x);
   /// Per triangle (compressed rows), the tets whose boxes grown by the margin overlap the
   /// triangle's grown by twice it.
   struct CandidateList {
     std::vector<Index> start, tets;
   };
+  /// The boxes of tree b's tets, in its primitive order.
+  std::vector<Box3> tree_boxes(const std::vector<Box3>& boxes, size_t b) const;
   /// Refits trees_ to the tets' boxes at positions x and lists every triangle's candidate tets
-  /// (this rank's) into listed_.
+  /// into listed_.
   void list_candidates(const Points& x, const std::vector<Box3>& boxes);
-  /// The candidate list from trees_ as refitted, the triangles at x: with `own`, only the tets
-  /// owned_ marks.
-  CandidateList query_candidates(const Points& x, bool own) const;
   /// The pairs of `list` at x (tets' boxes `boxes`) whose clipped polygon has area, in triangle
   /// order. `candidates`: the pairs clipped.
   std::vector<ContactPair> clip(const Points& x, const std::vector<Box3>& boxes,
@@ -124,15 +148,16 @@ class MaterialDepthContact final : public ForceModule {
   bool searched(Index a, Index b) const;
 
   std::vector<Body> bodies_;
-  std::vector<AabbTree> trees_;  // per body over its tets (primitive k: tet first_tet + k)
-  double margin_ = 0;            // [m] a node may move this far before the list is made anew
-  Points listed_x_;              // positions at which the list was made (empty: none yet)
-  CandidateList listed_;         // made at listed_x_
+  std::vector<AabbTree> trees_;  // per body over its (owned) tets, primitive k: tree_tets_[k]
+  std::vector<std::vector<Index>> tree_tets_;  // per body
+  double margin_ = 0;     // [m] a node may move this far before the list is made anew
+  Points listed_x_;       // positions at which the list was made (empty: none yet)
+  CandidateList listed_;  // made at listed_x_
   std::vector<ContactPair> pairs_;
   PairSchedule schedule_;  // of pairs_: tet corners, triangle corners
   ContactStats stats_;
   ContactInterfaces interfaces_;
-  std::vector<char> owned_;  // per tet, whether prepare() lists its pairs; empty: all
+  ContactPart part_;
   const BlockSparseMatrix* bound_ = nullptr;
   bool pattern_changed_ = false;
 };

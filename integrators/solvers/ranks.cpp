@@ -191,4 +191,26 @@ void Ranks::sum(VectorX& v) {
   VecRestoreArrayRead(s.all, &all);
 }
 
+std::vector<double> Ranks::concatenate(const std::vector<double>& mine) const {
+  Vec part = nullptr, all = nullptr;
+  VecScatter to_all = nullptr;
+  petsc_check(VecCreateMPIWithArray(PETSC_COMM_WORLD, 1, static_cast<PetscInt>(mine.size()),
+                                    PETSC_DECIDE, mine.data(), &part),
+              "VecCreateMPIWithArray");
+  petsc_check(VecScatterCreateToAll(part, &to_all, &all), "VecScatterCreateToAll");
+  petsc_check(VecScatterBegin(to_all, part, all, INSERT_VALUES, SCATTER_FORWARD),
+              "VecScatterBegin");
+  petsc_check(VecScatterEnd(to_all, part, all, INSERT_VALUES, SCATTER_FORWARD), "VecScatterEnd");
+  PetscInt length = 0;
+  petsc_check(VecGetSize(all, &length), "VecGetSize");
+  const PetscScalar* values = nullptr;
+  petsc_check(VecGetArrayRead(all, &values), "VecGetArrayRead");
+  std::vector<double> out(values, values + length);
+  VecRestoreArrayRead(all, &values);
+  VecScatterDestroy(&to_all);
+  VecDestroy(&all);
+  VecDestroy(&part);
+  return out;
+}
+
 }  // namespace depthfem

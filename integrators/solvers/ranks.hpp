@@ -54,6 +54,9 @@ class Ranks {
   /// the non-zero entries go into a PETSc vector (ADD_VALUES; those of rows another rank owns
   /// travel in PETSc's stash) that is then scattered to all (VecScatterCreateToAll).
   void sum(VectorX& v);
+  /// Every rank's `mine` (of any length) one after another, rank 0's first, on every rank: a
+  /// PETSc vector with `mine` as this rank's part, scattered to all (VecScatterCreateToAll).
+  std::vector<double> concatenate(const std::vector<double>& mine) const;
 
  private:
   struct Vectors;  // the PETSc vectors and scatter of sum(VectorX&), for the last length

@@ -232,7 +232,9 @@ TEST(MaterialDepthContact, TheCandidateListFindsWhatASearchAtThePositionsFinds) 
 // A distributed run's ranks: each module clips only the pairs of the tets it owns, so two
 // modules owning complementary halves hold together the whole module's pairs and energy, and
 // each reports the whole surface (the forces, areas and depth integrals of every triangle).
-TEST(MaterialDepthContact, OwnedTetsSplitThePairsButNotTheReport) {
+// Two halves of the tets, as two ranks hold them: each half's trees, pairs and energy are its
+// own tets', and the two halves' report shares, merged, give the report of the whole.
+TEST(MaterialDepthContact, OwnedTetsSplitThePairsAndTheirSharesMakeTheReport) {
   const Mesh m = three_boxes();
   const ContactOptions options{.penalty = 1e5};
   MaterialDepthContact whole(m, material_depth(m), options);
@@ -243,34 +245,53 @@ TEST(MaterialDepthContact, OwnedTetsSplitThePairsButNotTheReport) {
   std::set<std::pair<Index, Index>> all, split;
   for (const ContactPair& p : whole.pairs()) all.insert({p.tri, p.tet});
   double energy = 0;
+  std::vector<ContactShare> concatenated;
+  size_t first_half = 0;  // shares in concatenated
   for (const int half : {0, 1}) {
-    MaterialDepthContact part(m, material_depth(m), options);
-    std::vector<char> owned(static_cast<size_t>(m.num_tets()));
-    for (Index t = 0; t < m.num_tets(); ++t) owned[static_cast<size_t>(t)] = t % 2 == half;
-    part.set_owned_tets(owned);
+    ContactPart owned;
+    owned.owned.resize(static_cast<size_t>(m.num_tets()));
+    for (Index t = 0; t < m.num_tets(); ++t) owned.owned[static_cast<size_t>(t)] = t % 2 == half;
+    MaterialDepthContact part(m, material_depth(m), options, owned);
     part.begin_step(m.X);
     part.prepare(m.X);
+    EXPECT_LT(part.stats().listed, whole.stats().listed);
     for (const ContactPair& p : part.pairs()) {
       EXPECT_EQ(p.tet % 2, half);
       EXPECT_TRUE(split.insert({p.tri, p.tet}).second) << "a pair on both halves";
     }
     energy += part.evaluate(m.X, nullptr, nullptr);
-    StepRecord reported;
-    part.report(m.X, reported);
-    const double scale = expected.surface.force.cwiseAbs().maxCoeff();
-    EXPECT_LE((reported.surface.force - expected.surface.force).cwiseAbs().maxCoeff(),
-              1e-12 * scale);
-    EXPECT_LE((reported.surface.area - expected.surface.area).cwiseAbs().maxCoeff(),
-              1e-12 * expected.surface.area.maxCoeff());
-    EXPECT_LE(
-        (reported.surface.depth_integral - expected.surface.depth_integral).cwiseAbs().maxCoeff(),
-        1e-12 * expected.surface.depth_integral.maxCoeff());
+    const std::vector<ContactShare> shares = part.shares(m.X);
+    concatenated.insert(concatenated.end(), shares.begin(), shares.end());
+    if (half == 0) first_half = concatenated.size();
   }
   EXPECT_GT(all.size(), 100u) << "the boxes must overlap";
   EXPECT_EQ(split, all);
   const double total = whole.evaluate(m.X, nullptr, nullptr);
   EXPECT_GT(total, 0);
   EXPECT_NEAR(energy, total, 1e-12 * total);
+
+  const std::vector<ContactShare> merged = MaterialDepthContact::merge(concatenated);
+  EXPECT_LT(merged.size(), concatenated.size()) << "no triangle has pairs on both halves";
+  StepRecord reported;
+  whole.report_shares(merged, reported);
+  const auto close = [](const auto& a, const auto& b) {
+    return (a - b).cwiseAbs().maxCoeff() <= 1e-12 * b.cwiseAbs().maxCoeff();
+  };
+  EXPECT_TRUE(close(reported.surface.force, expected.surface.force));
+  EXPECT_TRUE(close(reported.surface.magnitude, expected.surface.magnitude));
+  EXPECT_TRUE(close(reported.surface.area, expected.surface.area));
+  EXPECT_TRUE(close(reported.surface.depth_integral, expected.surface.depth_integral));
+  ASSERT_EQ(reported.contact.size(), expected.contact.size());
+  for (size_t r = 0; r < expected.contact.size(); ++r) {
+    const InterfaceForce &a = reported.contact[r], &b = expected.contact[r];
+    EXPECT_LE((a.force - b.force).norm(), 1e-12 * b.force.norm()) << "row " << r;
+    EXPECT_NEAR(a.magnitude, b.magnitude, 1e-12 * b.magnitude) << "row " << r;
+    EXPECT_NEAR(a.area, b.area, 1e-12 * b.area) << "row " << r;
+  }
+  // The first half's shares alone miss the other half's pairs.
+  StepRecord half;
+  whole.report_shares(MaterialDepthContact::merge(std::span(concatenated).first(first_half)), half);
+  EXPECT_FALSE(close(half.surface.area, expected.surface.area));
 }
 
 // Energy, gradient and Hessian of a module at x on `threads` threads, into a matrix bound to it.
