@@ -48,10 +48,11 @@ TEST(KneeScene, LoadsBodiesRegionsAndConditions) {
   }
 }
 
-// The fine variant: the same conditions, contact and materials on a mesh of more than three
-// times the tets; of the solver options only Newton's cap per increment differs (the default 30,
-// as the fine run was made). A run of it is a benchmark: bench/knee_flexion.sh.
-TEST(KneeScene, FineVariantDiffersInItsMeshAndNewtonCap) {
+// The fine variant: the same conditions, contact, materials and solver options on a mesh of more
+// than three times the tets (Newton's cap per increment too: capped at the default 30, the fine
+// run failed at 148.9 degrees, bench/results/knee.md). A run of it is a benchmark:
+// bench/knee_flexion.sh.
+TEST(KneeScene, FineVariantDiffersInItsMeshAlone) {
   const Scene coarse = load("knee_flexion"), fine = load("knee_flexion_fine");
   EXPECT_GT(fine.mesh.num_tets(), 3 * coarse.mesh.num_tets());
   ASSERT_EQ(fine.constraints.size(), coarse.constraints.size());
@@ -66,7 +67,7 @@ TEST(KneeScene, FineVariantDiffersInItsMeshAndNewtonCap) {
   EXPECT_EQ(f.min_increment, c.min_increment);
   EXPECT_EQ(fine.tolerance, coarse.tolerance);  // relative; the Newton test scales it per mesh
   EXPECT_EQ(c.newton.max_iterations, 100);
-  EXPECT_EQ(f.newton.max_iterations, 30);
+  EXPECT_EQ(f.newton.max_iterations, c.newton.max_iterations);
 }
 
 // The Veronda variant: the same scene with the soft tissue's model swapped, at the same
