@@ -236,15 +236,11 @@ std::vector<ContactShare> MaterialDepthContact::shares(const Points& x) const {
     for (Index k = r.begin(); k < r.end(); ++k)
       energies[k] = pair_derivatives(x, pairs_[k], gradients[k], nullptr);
   });
-  // A triangle's pairs, taken together (by triangle, then in processing order), are netted per
-  // body the triangle enters, so that splitting a triangle among tets adds no force: the
-  // in-plane pulls of the pieces cancel.
-  std::vector<Index> by_triangle(static_cast<size_t>(n));
-  std::iota(by_triangle.begin(), by_triangle.end(), Index(0));
-  std::ranges::stable_sort(by_triangle, {}, [&](Index k) { return pairs_[k].tri; });
+  // One share per pair that presses, in processing order; merge() nets a triangle's pairs per
+  // body it enters, so that splitting a triangle among tets adds no force: the in-plane pulls of
+  // the pieces cancel.
   std::vector<ContactShare> out;
-  size_t first = 0;  // the current triangle's first share in out
-  for (const Index k : by_triangle) {
+  for (Index k = 0; k < n; ++k) {
     const ContactPair& p = pairs_[k];
     // A polygon with zero depth everywhere (a surface resting on another, a bonded interface)
     // touches but does not press: no force, no contact area.
@@ -260,16 +256,9 @@ std::vector<ContactShare> MaterialDepthContact::shares(const Points& x) const {
     for (int j = 0; j < p.polygon.size; ++j)
       G[j] = g[0] + slope.dot(make_point<double>(p.polygon.x[j], 0) - P[0]);
     const PolygonMoments moments = polygon_moments(p.polygon, G);
-    if (first == out.size() || out[first].tri != p.tri) first = out.size();
-    const Index body = tet_body_(p.tet);
-    auto share = std::find_if(out.begin() + static_cast<std::ptrdiff_t>(first), out.end(),
-                              [&](const ContactShare& s) { return s.body == body; });
-    if (share == out.end()) share = out.insert(out.end(), {.tri = p.tri, .body = body});
-    share->force += on_triangle;
-    share->area += moments.area;
-    share->depth_integral += moments.depth_integral;
+    out.push_back({p.tri, tet_body_(p.tet), on_triangle, moments.area, moments.depth_integral});
   }
-  return out;
+  return merge(out);
 }
 
 std::vector<ContactShare> MaterialDepthContact::merge(std::span<const ContactShare> shares) {

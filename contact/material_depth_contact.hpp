@@ -97,8 +97,8 @@ class MaterialDepthContact final : public ForceModule {
   void report(const Points& x, StepRecord& step) const override;
   std::vector<std::string> interface_names() const override { return interfaces_.names(); }
 
-  /// The shares of pairs() at x, by triangle, the bodies of a triangle in the order its first
-  /// pair with each comes.
+  /// The shares of pairs() at x, merged: by triangle, the bodies of a triangle in the order its
+  /// first pair with each comes.
   std::vector<ContactShare> shares(const Points& x) const;
   /// Shares of several ranks, one after another, merged: by triangle, the same (triangle, body)
   /// summed in the order they come.

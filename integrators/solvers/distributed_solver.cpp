@@ -230,7 +230,7 @@ bool DistributedSolver::Impl::run_direct(KSP solver, int& iterations) {
 }
 
 // CG preconditioned by the kept factor of ksp (of an earlier matrix of this pattern, shifted or
-// not), to |b - A x| <= tolerance |b| in at most factor_cost iterations; false when it falls
+// not), to |b - A x| <= tolerance |b| in at most kept.max_iterations(); false when it falls
 // short or meets negative curvature.
 bool DistributedSolver::Impl::reuse_factor(double tolerance, int& iterations) {
   PC pc = nullptr;
