@@ -228,21 +228,9 @@ void drive(const Scene& scene, SceneModel& model, StepLifecycle& lifecycle, Star
 }
 
 // The processes of a distributed run (mpirun -n N, N > 1), its tets partitioned among them, or
-// null for a serial run. Refuses what does not run distributed yet.
+// null for a serial run.
 std::unique_ptr<Ranks> start_ranks(const Scene& scene, PhaseTimers& timers) {
   if (Ranks::launched() == 1) return nullptr;
-  const auto refuse = [&](const std::string& what) {
-    throw InputError(scene.file + ": a run on " + std::to_string(Ranks::launched()) +
-                     " processes (mpirun) does not take " + what + " yet: run it without mpirun");
-  };
-  if (scene.analysis != Analysis::kStatic) {
-    const Integrator integrator = scene.dynamic_options.integrator;
-    if (integrator != Integrator::kImplicitEuler && integrator != Integrator::kNewmark &&
-        integrator != Integrator::kGeneralizedAlpha)
-      refuse(
-          "the explicit and SUNDIALS integrators (dynamic.integrator symplectic_euler, arkode, "
-          "arkode_dirk, cvode_bdf)");
-  }
   auto ranks = std::make_unique<Ranks>();
   PhaseTimers::Scope t(timers, "partition");
   ranks->partition(scene.mesh.tets, scene.mesh.num_nodes());

@@ -62,7 +62,6 @@ DualRows dual_rows(const TetIndices& tets) {
 }  // namespace
 
 struct Ranks::Vectors {
-  Index length = -1;
   Vec parallel = nullptr, all = nullptr;
   VecScatter to_all = nullptr;
   ~Vectors() {
@@ -159,15 +158,15 @@ double Ranks::min(double value) const {
 
 void Ranks::sum(VectorX& v) {
   if (size_ == 1) return;
-  if (!vectors_ || vectors_->length != v.size()) {
-    vectors_ = std::make_unique<Vectors>();
-    vectors_->length = v.size();
-    petsc_check(VecCreateMPI(PETSC_COMM_WORLD, PETSC_DECIDE, v.size(), &vectors_->parallel),
+  std::unique_ptr<Vectors>& kept = vectors_[v.size()];
+  if (!kept) {
+    kept = std::make_unique<Vectors>();
+    petsc_check(VecCreateMPI(PETSC_COMM_WORLD, PETSC_DECIDE, v.size(), &kept->parallel),
                 "VecCreateMPI");
-    petsc_check(VecScatterCreateToAll(vectors_->parallel, &vectors_->to_all, &vectors_->all),
+    petsc_check(VecScatterCreateToAll(kept->parallel, &kept->to_all, &kept->all),
                 "VecScatterCreateToAll");
   }
-  Vectors& s = *vectors_;
+  Vectors& s = *kept;
   std::vector<PetscInt> rows;
   std::vector<PetscScalar> values;
   for (Index i = 0; i < v.size(); ++i)

@@ -2,6 +2,7 @@
 /// The processes of a run started by mpirun, the partition of the tets among them, and the
 /// reductions that keep the state every rank holds identical.
 
+#include <map>
 #include <memory>
 #include <vector>
 
@@ -59,10 +60,10 @@ class Ranks {
   std::vector<double> concatenate(const std::vector<double>& mine) const;
 
  private:
-  struct Vectors;  // the PETSc vectors and scatter of sum(VectorX&), for the last length
+  struct Vectors;  // the PETSc vectors and scatter of sum(VectorX&) for one length
   int rank_ = 0, size_ = 1;
   std::vector<int> tet_owner_, node_owner_;
-  std::unique_ptr<Vectors> vectors_;
+  std::map<Index, std::unique_ptr<Vectors>> vectors_;  // by length
 };
 
 }  // namespace depthfem
