@@ -663,6 +663,7 @@ void read_solver(JsonObject s, Scene& scene) {
   // One tolerance and cap for every iterative method; unset, each keeps its own default.
   LinearSolverOptions& lin = o.newton.linear;
   lin.restart = s.integer("gmres_restart", lin.restart);
+  lin.auto_flops_per_entry = s.number("auto_flops_per_entry", lin.auto_flops_per_entry);
   if (s.has("linear_tolerance"))
     lin.tolerance = lin.amg.tolerance = s.number("linear_tolerance", lin.tolerance);
   if (s.has("linear_max_iterations"))
@@ -698,6 +699,7 @@ void read_solver(JsonObject s, Scene& scene) {
   }
   if (!(lin.tolerance > 0 && lin.tolerance < 1)) s.fail("linear_tolerance", "must be in (0, 1)");
   if (lin.max_iterations < 1) s.fail("linear_max_iterations", "must be >= 1");
+  if (!(lin.auto_flops_per_entry > 0)) s.fail("auto_flops_per_entry", "must be > 0");
   if (lin.restart < 1) s.fail("gmres_restart", "must be >= 1");
   if (o.newton.max_iterations < 1) s.fail("max_newton_iterations", "must be >= 1");
   if (o.newton.max_line_search < 0) s.fail("max_line_search", "must be >= 0");

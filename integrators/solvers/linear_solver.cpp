@@ -41,23 +41,60 @@ void LinearSolver::set_decoupled_nodes(std::vector<char> nodes) {
 }
 
 void LinearSolver::distribute(Ranks& ranks) {
+  ranks_ = &ranks;
+  if (options_.kind != LinearSolverKind::kAuto) start_distributed(options_.kind);
+}
+
+void LinearSolver::start_distributed(LinearSolverKind kind) {
   DistributedSolverOptions o{.method = DistributedMethod::kDirect,
                              .tolerance = options_.tolerance,
                              .max_iterations = options_.max_iterations,
                              .restart = options_.restart,
                              .reuse_tolerance = options_.direct.reuse_tolerance,
                              .amg = options_.amg};
-  if (options_.kind == LinearSolverKind::kAmg) o.method = DistributedMethod::kAmg;
-  if (options_.kind == LinearSolverKind::kGmres) o.method = DistributedMethod::kGmres;
-  if (options_.kind == LinearSolverKind::kCg) o.method = DistributedMethod::kCg;
-  distributed_ = std::make_unique<DistributedSolver>(ranks, o);
+  if (kind == LinearSolverKind::kAmg) o.method = DistributedMethod::kAmg;
+  if (kind == LinearSolverKind::kGmres) o.method = DistributedMethod::kGmres;
+  if (kind == LinearSolverKind::kCg) o.method = DistributedMethod::kCg;
+  distributed_ = std::make_unique<DistributedSolver>(*ranks_, o);
 }
+
+LinearSolver::Choice LinearSolver::choose(const BlockSparseMatrix& A) const {
+  return predicted_factor_flops(A, decoupled_) >
+                 options_.auto_flops_per_entry * lower_triangle_entries(A)
+             ? Choice::kAmg
+             : Choice::kDirect;
+}
+
+namespace {
+// The pattern of the whole matrix, on every rank, from each rank's part: every rank's blocks
+// (i, j), j >= i, one after another (as doubles, exact below 2^53).
+BlockSparseMatrix whole_pattern(const BlockSparseMatrix& part, const Ranks& ranks) {
+  std::vector<double> mine;
+  for (Index i = 0; i < part.num_nodes(); ++i)
+    for (Index k = part.row_begin(i); k < part.row_begin(i + 1); ++k)
+      if (part.block_col(k) >= i) {
+        mine.push_back(static_cast<double>(i));
+        mine.push_back(static_cast<double>(part.block_col(k)));
+      }
+  const std::vector<double> all = ranks.concatenate(mine);
+  SparsityBuilder builder(part.num_nodes());
+  for (size_t k = 0; k + 1 < all.size(); k += 2) {
+    const Index pair[2] = {static_cast<Index>(all[k]), static_cast<Index>(all[k + 1])};
+    builder.add_clique(pair);
+  }
+  return BlockSparseMatrix(builder);
+}
+}  // namespace
 
 LinearSolveStats LinearSolver::solve(const BlockSparseMatrix& A, const VectorX& b, VectorX& x,
                                      const Points* positions, double tolerance) {
   x.setZero(b.size());
   if (b.norm() == 0) return {0, 0.0, true};
-  if (distributed_) {
+  if (ranks_) {
+    if (!distributed_) {  // kAuto decides on the first matrix, whole: every rank alike
+      choice_ = choose(whole_pattern(A, *ranks_));
+      start_distributed(choice_ == Choice::kAmg ? LinearSolverKind::kAmg : LinearSolverKind::kDirect);
+    }
     const DistributedSolveStats s = distributed_->solve(A, b, x, positions, tolerance);
     return {.iterations = s.iterations,
             .relative_residual = 0,  // not computed: A is spread over the ranks
@@ -67,12 +104,7 @@ LinearSolveStats LinearSolver::solve(const BlockSparseMatrix& A, const VectorX& 
   }
   switch (options_.kind) {
     case LinearSolverKind::kAuto:
-      if (choice_ == Choice::kUndecided) {
-        choice_ = predicted_factor_flops(A, decoupled_) >
-                          options_.auto_flops_per_entry * lower_triangle_entries(A)
-                      ? Choice::kAmg
-                      : Choice::kDirect;
-      }
+      if (choice_ == Choice::kUndecided) choice_ = choose(A);
       return choice_ == Choice::kAmg ? amg(A, b, x, positions) : direct(A, b, x, tolerance);
     case LinearSolverKind::kAmg:
       return amg(A, b, x, positions);

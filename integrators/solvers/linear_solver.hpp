@@ -63,9 +63,10 @@ class LinearSolver {
   /// DirectSolver::set_decoupled_nodes).
   void set_decoupled_nodes(std::vector<char> nodes);
   /// Solves every later system across `ranks` (DistributedSolver; which must outlive this):
-  /// A is then each rank's part, b and x whole on every rank. kAuto and kDirect take MUMPS,
-  /// kAmg CG with GAMG (MUMPS where CG fails), kGmres and kCg PETSc's Jacobi-preconditioned
-  /// methods with this solver's tolerance and caps.
+  /// A is then each rank's part, b and x whole on every rank. kDirect takes MUMPS, kAmg CG with
+  /// GAMG (MUMPS where CG fails), kGmres and kCg PETSc's Jacobi-preconditioned methods with this
+  /// solver's tolerance and caps; kAuto one of the first two by the serial rule, applied to the
+  /// pattern of the whole first matrix (gathered from the ranks' parts).
   void distribute(Ranks& ranks);
   /// Starts from x = 0. Returns statistics; x holds the best solution found. `positions`
   /// (#nodes x 3, current) give AMG its rigid-body modes (without them: translations only).
@@ -92,6 +93,9 @@ class LinearSolver {
   std::unique_ptr<AmgSolver> amg_;                  // created on first use (starts PETSc and MPI)
   std::unique_ptr<DistributedSolver> distributed_;  // a distributed run's
   enum class Choice { kUndecided, kDirect, kAmg } choice_ = Choice::kUndecided;  // kAuto
+  Choice choose(const BlockSparseMatrix& A) const;  // kAuto's rule for the whole matrix A
+  void start_distributed(LinearSolverKind kind);
+  Ranks* ranks_ = nullptr;  // a distributed run's
 };
 
 }  // namespace depthfem

@@ -49,6 +49,23 @@ factored, solves = s["factorizations"][:].sum(), s["linear_solves"][:].sum()
 sys.exit(0 if 0 < factored < solves else f"{factored} factorisations in {solves} solves")
 PY
 against_serial 2 fold_slab 1e-6 fold_slab
+# auto applies the serial rule to the whole first matrix, its pattern gathered from the ranks'
+# parts: uniaxial_block's predicted flops per entry are 28.4 for the whole matrix, 15.6 and 22.4
+# for the two ranks' parts (measured), so a crossover of 25 takes AMG-CG (no factorisation) as
+# the serial run does, where a rule applied to the parts would take MUMPS; 1e12 takes MUMPS.
+for crossover in 25 1e12; do
+  against_serial 2 "auto_$crossover" 1e-6 uniaxial_block --set solver.linear_solver='"auto"' \
+    --set solver.auto_flops_per_entry=$crossover
+  /usr/bin/python3 - "$tmp/auto_$crossover.h5" "$tmp/auto_${crossover}_2.h5" "$crossover" <<'PY' \
+    || fail "auto with crossover $crossover chose differently"
+import sys, h5py
+direct = float(sys.argv[3]) > 28.4
+for f in sys.argv[1:3]:
+    factored = h5py.File(f)["steps"]["factorizations"][:].sum()
+    if (factored > 0) != direct:
+        sys.exit(f"{f}: {factored} factorisations, expected {'some' if direct else 'none'}")
+PY
+done
 
 # Time-dependent analyses (Newton tolerance 1e-12 x E h^2 per dof, see above). Newmark and
 # generalized-alpha with mass and stiffness (Rayleigh) damping: inertia, dashpots and gravity.
