@@ -93,7 +93,8 @@ LinearSolveStats LinearSolver::solve(const BlockSparseMatrix& A, const VectorX& 
   if (ranks_) {
     if (!distributed_) {  // kAuto decides on the first matrix, whole: every rank alike
       choice_ = choose(whole_pattern(A, *ranks_));
-      start_distributed(choice_ == Choice::kAmg ? LinearSolverKind::kAmg : LinearSolverKind::kDirect);
+      start_distributed(choice_ == Choice::kAmg ? LinearSolverKind::kAmg
+                                                : LinearSolverKind::kDirect);
     }
     const DistributedSolveStats s = distributed_->solve(A, b, x, positions, tolerance);
     return {.iterations = s.iterations,
