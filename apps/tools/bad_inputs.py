@@ -232,7 +232,8 @@ def cases(exe):
                        ("initial_increment", -0.5), ("initial_increment", 2),
                        ("min_increment", -1), ("tolerance", -1), ("tolerance", 1e308),
                        ("tolerance", 0), ("linear_max_iterations", -5),
-                       ("linear_tolerance", 0), ("forcing_max", 1)]:
+                       ("linear_tolerance", 0), ("forcing_max", 1),
+                       ("auto_flops_per_entry", 0)]:
         add("sizes and counts", f"solver.{key} {value}",
             {"scene.json": scene(setter(solver + [key], value))})
     for key, value in [("preset", "papr"), ("preset", 1), ("preset", ""),
