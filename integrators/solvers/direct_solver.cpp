@@ -111,6 +111,7 @@ struct DirectSolver::Impl {
   cholmod_factor* llt = nullptr;                    // supernodal LL^T
   std::unique_ptr<SupernodalCholesky> llt_numeric;  // fills llt
   cholmod_factor* ldlt = nullptr;                   // simplicial LDL^T, analysed on first need
+  double ordered_flops = 0;  // of the pattern the ordering perm was computed for
   KeptFactor kept;       // llt, kept for the matrices of this pattern after the factored one
   bool shifted = false;  // the last factorisation was of a shifted matrix
   cholmod_dense *X = nullptr, *Y = nullptr, *E = nullptr;  // solve workspace
@@ -146,6 +147,9 @@ struct DirectSolver::Impl {
   // Keeps the ordering and symbolic factor when M's pattern fits in the factor's (a contact
   // coupling already present as fill): only where A's entries land in L is found anew.
   bool refit(const BlockSparseMatrix& M);
+  // Keeps the ordering for M's pattern where its factorisation under it costs at most 2 % more
+  // flops than that of the pattern it was computed for: only the symbolic analysis is redone.
+  bool reanalyse(const BlockSparseMatrix& M);
   void analyse(const BlockSparseMatrix& M);
   std::vector<int> node_ordering(cholmod_sparse* G, DirectOrdering ordering);
   cholmod_factor* analyse_with(int supernodal);
@@ -215,15 +219,28 @@ bool DirectSolver::Impl::refit(const BlockSparseMatrix& M) {
   return true;
 }
 
+bool DirectSolver::Impl::reanalyse(const BlockSparseMatrix& M) {
+  if (!llt || M.num_nodes() != static_cast<Index>(llt->n / 3)) return false;
+  const DirectAnalysis ordered = analysis;
+  release_pattern();  // on failure, analyse() starts from here
+  A = lower_triangle(M);
+  llt = analyse_with(CHOLMOD_SUPERNODAL);
+  if (!(c.fl <= 1.02 * ordered_flops)) return false;
+  analysis = {ordered.ordering, c.fl, c.lnz, ordered.refitted, ordered.reanalysed + 1};
+  llt_numeric = std::make_unique<SupernodalCholesky>(*A, *llt, c);
+  version = M.pattern_version();
+  return true;
+}
+
 void DirectSolver::Impl::analyse(const BlockSparseMatrix& M) {
-  if (refit(M)) return;
+  if (refit(M) || reanalyse(M)) return;
   release_pattern();
   A = lower_triangle(M);
   const auto G = block_graph(M, pattern, c);
   const auto try_ordering = [&](DirectOrdering o) {
     perm = node_ordering(G.get(), o);
     llt = analyse_with(CHOLMOD_SUPERNODAL);
-    analysis = {o, c.fl, c.lnz, 0};
+    analysis = {o, c.fl, c.lnz, 0, 0};
   };
   const DirectOrdering first =
       options.ordering == DirectOrdering::kMetis ? DirectOrdering::kMetis : DirectOrdering::kAmd;
@@ -245,6 +262,7 @@ void DirectSolver::Impl::analyse(const BlockSparseMatrix& M) {
       analysis = amd;
     }
   }
+  ordered_flops = analysis.flops;
   llt_numeric = std::make_unique<SupernodalCholesky>(*A, *llt, c);
   version = M.pattern_version();
 }

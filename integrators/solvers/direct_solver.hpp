@@ -37,6 +37,10 @@ struct DirectAnalysis {
   double factor_entries = 0;                       ///< nonzeros of L
   /// Patterns since this ordering was computed that fit in its factor (kept it).
   int refitted = 0;
+  /// Patterns since this ordering was computed that did not fit in its factor and were
+  /// analysed anew under it, their factorisation within 2 % of the flops of the pattern it was
+  /// computed for (cheaper than a new ordering: METIS takes several symbolic analyses' time).
+  int reanalysed = 0;
 };
 
 /// The flops of an LL^T factorisation of A predicted from the graph of its 3x3 blocks alone: an
