@@ -112,8 +112,8 @@ struct DirectSolver::Impl {
   std::unique_ptr<SupernodalCholesky> llt_numeric;  // fills llt
   cholmod_factor* ldlt = nullptr;                   // simplicial LDL^T, analysed on first need
   double ordered_flops = 0;  // of the pattern the ordering perm was computed for
-  KeptFactor kept;       // llt, kept for the matrices of this pattern after the factored one
-  bool shifted = false;  // the last factorisation was of a shifted matrix
+  KeptFactor kept;           // llt, kept for the matrices of this pattern after the factored one
+  bool shifted = false;      // the last factorisation was of a shifted matrix
   cholmod_dense *X = nullptr, *Y = nullptr, *E = nullptr;  // solve workspace
 
   explicit Impl(DirectSolverOptions o) : options(o) {
