@@ -144,12 +144,15 @@ struct DirectSolver::Impl {
 
   // Fills `pattern` and `diagonal` for M and returns its lower triangle with that pattern.
   cholmod_sparse* lower_triangle(const BlockSparseMatrix& M);
-  // Keeps the ordering and symbolic factor when M's pattern fits in the factor's (a contact
-  // coupling already present as fill): only where A's entries land in L is found anew.
-  bool refit(const BlockSparseMatrix& M);
-  // Keeps the ordering for M's pattern where its factorisation under it costs at most 2 % more
-  // flops than that of the pattern it was computed for: only the symbolic analysis is redone.
-  bool reanalyse(const BlockSparseMatrix& M);
+  // Keeps the ordering and symbolic factor when the pattern of `next` (M's lower triangle) fits
+  // in the factor's (a contact coupling already present as fill): only where its entries land
+  // in L is found anew, and A becomes `next`. False (next untouched) otherwise.
+  bool refit(const BlockSparseMatrix& M, cholmod_sparse* next);
+  // Analyses A under the ordering perm, kept where the factorisation costs at most 2 % more flops
+  // than that of the pattern perm was computed for: only the symbolic analysis is redone.
+  bool reanalyse();
+  // A new ordering of A (M's pattern) and its analysis into llt.
+  void order(const BlockSparseMatrix& M);
   void analyse(const BlockSparseMatrix& M);
   std::vector<int> node_ordering(cholmod_sparse* G, DirectOrdering ordering);
   cholmod_factor* analyse_with(int supernodal);
@@ -201,14 +204,10 @@ cholmod_sparse* DirectSolver::Impl::lower_triangle(const BlockSparseMatrix& M) {
   return out;
 }
 
-bool DirectSolver::Impl::refit(const BlockSparseMatrix& M) {
-  if (!llt || M.num_nodes() != static_cast<Index>(llt->n / 3)) return false;
-  cholmod_sparse* next = lower_triangle(M);
+bool DirectSolver::Impl::refit(const BlockSparseMatrix& M, cholmod_sparse* next) {
+  if (!llt || next->nrow != llt->n) return false;
   std::unique_ptr<SupernodalCholesky> numeric = SupernodalCholesky::fitted(*next, *llt, c);
-  if (!numeric) {
-    cholmod_free_sparse(&next, &c);
-    return false;
-  }
+  if (!numeric) return false;
   cholmod_free_sparse(&A, &c);
   cholmod_free_factor(&ldlt, &c);
   A = next;
@@ -219,23 +218,30 @@ bool DirectSolver::Impl::refit(const BlockSparseMatrix& M) {
   return true;
 }
 
-bool DirectSolver::Impl::reanalyse(const BlockSparseMatrix& M) {
-  if (!llt || M.num_nodes() != static_cast<Index>(llt->n / 3)) return false;
-  const DirectAnalysis ordered = analysis;
-  release_pattern();  // on failure, analyse() starts from here
-  A = lower_triangle(M);
+bool DirectSolver::Impl::reanalyse() {
   llt = analyse_with(CHOLMOD_SUPERNODAL);
-  if (!(c.fl <= 1.02 * ordered_flops)) return false;
-  analysis = {ordered.ordering, c.fl, c.lnz, ordered.refitted, ordered.reanalysed + 1};
-  llt_numeric = std::make_unique<SupernodalCholesky>(*A, *llt, c);
-  version = M.pattern_version();
+  if (!(c.fl <= 1.02 * ordered_flops)) {
+    cholmod_free_factor(&llt, &c);
+    return false;
+  }
+  analysis = {analysis.ordering, c.fl, c.lnz, analysis.refitted, analysis.reanalysed + 1};
   return true;
 }
 
+// The lower triangle of M is built once, for whichever of refit, reanalyse and a new ordering
+// takes it.
 void DirectSolver::Impl::analyse(const BlockSparseMatrix& M) {
-  if (refit(M) || reanalyse(M)) return;
+  cholmod_sparse* next = lower_triangle(M);
+  if (refit(M, next)) return;
+  const bool ordered = llt && next->nrow == llt->n;  // perm orders a matrix of this size
   release_pattern();
-  A = lower_triangle(M);
+  A = next;
+  if (!(ordered && reanalyse())) order(M);
+  llt_numeric = std::make_unique<SupernodalCholesky>(*A, *llt, c);
+  version = M.pattern_version();
+}
+
+void DirectSolver::Impl::order(const BlockSparseMatrix& M) {
   const auto G = block_graph(M, pattern, c);
   const auto try_ordering = [&](DirectOrdering o) {
     perm = node_ordering(G.get(), o);
@@ -263,8 +269,6 @@ void DirectSolver::Impl::analyse(const BlockSparseMatrix& M) {
     }
   }
   ordered_flops = analysis.flops;
-  llt_numeric = std::make_unique<SupernodalCholesky>(*A, *llt, c);
-  version = M.pattern_version();
 }
 
 // Factors A into llt; false when it is not positive definite. Not cholmod_factorize: that
