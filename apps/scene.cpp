@@ -662,6 +662,10 @@ void read_solver(JsonObject s, Scene& scene) {
                                                        {"cg", LinearSolverKind::kCg}});
   // One tolerance and cap for every iterative method; unset, each keeps its own default.
   LinearSolverOptions& lin = o.newton.linear;
+  if (s.has("direct_precision"))
+    lin.direct.precision = s.choice<FactorPrecision>(
+        "direct_precision", "factor precision",
+        {{"double", FactorPrecision::kDouble}, {"single", FactorPrecision::kSingle}});
   lin.restart = s.integer("gmres_restart", lin.restart);
   lin.auto_flops_per_entry = s.number("auto_flops_per_entry", lin.auto_flops_per_entry);
   if (s.has("linear_tolerance"))

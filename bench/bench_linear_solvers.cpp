@@ -7,8 +7,8 @@
 //
 // Arguments: cells along the bar n; ordering (0 best of the two, 1 AMD, 2 METIS) or
 // preconditioner (0 GAMG, 1 BoomerAMG with PETSc's defaults; PETSC_OPTIONS sets others);
-// threads. Counters: unknowns, flops of one factorisation and entries of L (direct), CG
-// iterations (AMG).
+// threads; for the repeated solve, the factor's precision. Counters: unknowns, flops of one
+// factorisation and entries of L (direct), CG iterations (AMG).
 #include <benchmark/benchmark.h>
 
 #include <map>
@@ -98,14 +98,24 @@ void BM_PredictedFlops(benchmark::State& state) {
   set_counters(state, p);
 }
 
-// Factorisation and solve with the analysis kept: what a Newton iteration costs.
+// Factorisation and solve with the analysis kept: what a Newton iteration costs; the fourth
+// argument the factor's precision (0 double; 1 single, CG to kSingleExactTolerance; 2 single, CG
+// to 0.1, Newton's loosest forcing term). Counters: the relative residual |b - A x| / |b|
+// reached and the CG iterations on the single factor.
 void BM_DirectRepeatSolve(benchmark::State& state) {
   const Problem& p = cantilever(static_cast<int>(state.range(0)));
   const ThreadBudget budget(static_cast<int>(state.range(2)));
-  DirectSolver s(direct_options(state));
-  VectorX x;
-  s.solve(p.A, p.b, x);
-  for (auto _ : state) benchmark::DoNotOptimize(s.solve(p.A, p.b, x));
+  DirectSolverOptions o = direct_options(state);
+  o.precision = state.range(3) ? FactorPrecision::kSingle : FactorPrecision::kDouble;
+  DirectSolver s(o);
+  VectorX x, Ax;
+  const double tolerance = state.range(3) == 2 ? 0.1 : 0;
+  DirectSolveStats st = s.solve(p.A, p.b, x, tolerance);  // the analysis, outside the timing
+  for (auto _ : state) benchmark::DoNotOptimize(st = s.solve(p.A, p.b, x, tolerance));
+  p.A.multiply(x, Ax);
+  state.counters["residual"] = (p.b - Ax).norm() / p.b.norm();
+  state.counters["cg_iterations"] = st.cg_iterations;
+  state.counters["single"] = st.single;
   set_counters(state, p);
 }
 
@@ -132,7 +142,7 @@ BENCHMARK(BM_PredictedFlops)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK(BM_DirectRepeatSolve)
-    ->ArgsProduct({{40, 80, 160}, {1, 2}, {1, 2}})
+    ->ArgsProduct({{40, 80, 160}, {1, 2}, {1, 2}, {0, 1, 2}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK(BM_AmgRepeatSolve)

@@ -239,7 +239,8 @@ def cases(exe):
     for key, value in [("preset", "papr"), ("preset", 1), ("preset", ""),
                        ("gmres_restart", 0), ("gmres_restart", 2**31),
                        ("line_search_start", "half"), ("gradient_fallback", "yes"),
-                       ("linearised_start", 1)]:
+                       ("linearised_start", 1), ("direct_precision", "half"),
+                       ("direct_precision", 32)]:
         add("solver preset and its keys", f"solver.{key} {value!r}",
             {"scene.json": scene(setter(solver + [key], value))})
     for duration, step in [(1000, 1e-9), (1, 0), (1, -0.01), (-1, 0.01), (0, 0.01)]:

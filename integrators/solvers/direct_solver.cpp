@@ -19,6 +19,11 @@ namespace depthfem {
 
 namespace {
 
+// The most CG iterations on a new single-precision factor before A is factored in double. The
+// factor solves A to about its condition number times 6e-8, so that each iteration gains that
+// factor: a few iterations where single precision suits A, many where it does not.
+constexpr int kSingleMaxIterations = 30;
+
 // Lowest Ritz value of 30 Lanczos steps on D^-1/2 A D^-1/2, D = diag(weight) (from a fixed
 // pseudo-random start): it converges to the lowest eigenvalue from above, fast at the ends of the
 // spectrum; 30 products cost a few per cent of a factorisation. Scaled by the diagonal, the
@@ -111,9 +116,11 @@ struct DirectSolver::Impl {
   cholmod_factor* llt = nullptr;                    // supernodal LL^T
   std::unique_ptr<SupernodalCholesky> llt_numeric;  // fills llt
   cholmod_factor* ldlt = nullptr;                   // simplicial LDL^T, analysed on first need
-  double ordered_flops = 0;  // of the pattern the ordering perm was computed for
-  KeptFactor kept;           // llt, kept for the matrices of this pattern after the factored one
-  bool shifted = false;      // the last factorisation was of a shifted matrix
+  double ordered_flops = 0;    // of the pattern the ordering perm was computed for
+  KeptFactor kept;             // llt, kept for the matrices of this pattern after the factored one
+  bool shifted = false;        // the last factorisation was of a shifted matrix
+  std::vector<float> single;   // llt's values in single precision (FactorPrecision::kSingle)
+  bool factor_single = false;  // llt's factor is `single` (else llt->x)
   cholmod_dense *X = nullptr, *Y = nullptr, *E = nullptr;  // solve workspace
 
   explicit Impl(DirectSolverOptions o) : options(o) {
@@ -156,12 +163,15 @@ struct DirectSolver::Impl {
   void analyse(const BlockSparseMatrix& M);
   std::vector<int> node_ordering(cholmod_sparse* G, DirectOrdering ordering);
   cholmod_factor* analyse_with(int supernodal);
-  bool factorize_llt();
+  bool factorize_llt(bool in_single);
   bool factorize_ldlt();
-  bool factorize_shifted(const VectorX& d, const VectorX& weight, double s);
+  void shift_diagonal(const VectorX& d, const VectorX& weight, double s);
   void solve_with(cholmod_factor* L, const VectorX& b, VectorX& x);
-  bool reuse(const BlockSparseMatrix& M, const VectorX& b, VectorX& x, double tolerance,
-             int& iterations);
+  void precondition(const VectorX& r, VectorX& z);
+  bool cg(const BlockSparseMatrix& M, const VectorX& shift, const VectorX& b, VectorX& x,
+          double tolerance, int cap, int& iterations);
+  bool solve_factored(const BlockSparseMatrix& M, const VectorX& shift, const VectorX& b,
+                      VectorX& x, double tolerance, DirectSolveStats& stats);
 };
 
 // Orders the graph G of the 3x3 blocks (nine times fewer edges than the scalar graph) and
@@ -271,12 +281,14 @@ void DirectSolver::Impl::order(const BlockSparseMatrix& M) {
   ordered_flops = analysis.flops;
 }
 
-// Factors A into llt; false when it is not positive definite. Not cholmod_factorize: that
-// hands the large dense blocks to OpenBLAS's threads, which make the factor depend on the
-// thread count (SupernodalCholesky shares them by TBB, each on one BLAS thread).
-bool DirectSolver::Impl::factorize_llt() {
+// Factors A into llt, in single precision into `single` or in double into llt->x; false when it
+// is not positive definite. Not cholmod_factorize: that hands the large dense blocks to
+// OpenBLAS's threads, which make the factor depend on the thread count (SupernodalCholesky
+// shares them by TBB, each on one BLAS thread).
+bool DirectSolver::Impl::factorize_llt(bool in_single) {
   const SerialBlas serial;
-  return llt_numeric->factorize(*A, *llt);
+  factor_single = in_single;
+  return in_single ? llt_numeric->factorize(*A, *llt, single) : llt_numeric->factorize(*A, *llt);
 }
 
 // Factors A into ldlt (simplicial: no BLAS); false when it has a zero pivot.
@@ -287,11 +299,10 @@ bool DirectSolver::Impl::factorize_ldlt() {
   return ldlt->minor == ldlt->n;
 }
 
-// Factors A + s diag(weight) into llt, where d holds the diagonal of A; false as factorize_llt.
-bool DirectSolver::Impl::factorize_shifted(const VectorX& d, const VectorX& weight, double s) {
+// A's diagonal becomes that of A + s diag(weight), where d holds the diagonal of A.
+void DirectSolver::Impl::shift_diagonal(const VectorX& d, const VectorX& weight, double s) {
   double* values = static_cast<double*>(A->x);
   for (size_t j = 0; j < diagonal.size(); ++j) values[diagonal[j]] = d(j) + s * weight(j);
-  return factorize_llt();
 }
 
 void DirectSolver::Impl::solve_with(cholmod_factor* L, const VectorX& b, VectorX& x) {
@@ -308,6 +319,13 @@ void DirectSolver::Impl::solve_with(cholmod_factor* L, const VectorX& b, VectorX
   x = Eigen::Map<const VectorX>(static_cast<const double*>(X->x), b.size());
 }
 
+// z = L^-T L^-1 r with llt's factor, in whichever precision it was computed.
+void DirectSolver::Impl::precondition(const VectorX& r, VectorX& z) {
+  if (!factor_single) return solve_with(llt, r, z);
+  z.resize(r.size());
+  llt_numeric->solve(*llt, single, r.data(), z.data());
+}
+
 DirectSolver::DirectSolver(DirectSolverOptions options) : impl_(std::make_unique<Impl>(options)) {}
 DirectSolver::~DirectSolver() = default;
 
@@ -322,17 +340,20 @@ const DirectAnalysis& DirectSolver::analyse(const BlockSparseMatrix& M) {
   return impl_->analysis;
 }
 
-// Conjugate gradients preconditioned by the kept factor; false when they fall short.
-bool DirectSolver::Impl::reuse(const BlockSparseMatrix& M, const VectorX& b, VectorX& x,
-                               double tolerance, int& iterations) {
-  const int cap = kept.max_iterations();
+// Conjugate gradients on M + diag(shift) (shift empty: M) preconditioned by llt's factor, to
+// |b - A x| <= tolerance |b| in at most `cap` iterations; false when they fall short (A not
+// positive definite, or too slow: as soon as the reduction so far, extrapolated at its mean rate,
+// misses the cap).
+bool DirectSolver::Impl::cg(const BlockSparseMatrix& M, const VectorX& shift, const VectorX& b,
+                            VectorX& x, double tolerance, int cap, int& iterations) {
   x.setZero(b.size());
   VectorX r = b, z, p, Ap;
-  solve_with(llt, r, z);
+  precondition(r, z);
   p = z;
   double rz = r.dot(z);
   for (iterations = 1; iterations <= cap; ++iterations) {
     M.multiply(p, Ap);
+    if (shift.size()) Ap += shift.cwiseProduct(p);
     const double pAp = p.dot(Ap);
     if (!(pAp > 0)) return false;  // A is not positive definite
     const double alpha = rz / pAp;
@@ -340,16 +361,37 @@ bool DirectSolver::Impl::reuse(const BlockSparseMatrix& M, const VectorX& b, Vec
     r -= alpha * Ap;
     const double reduction = r.norm() / b.norm();
     if (reduction <= tolerance) return true;
-    // Give up as soon as the reduction so far, extrapolated at its mean rate, misses the cap.
     if (iterations >= 2 && iterations * std::log(tolerance) / std::log(reduction) > cap)
       return false;
-    solve_with(llt, r, z);
+    precondition(r, z);
     const double rz_next = r.dot(z);
     p = z + (rz_next / rz) * p;
     rz = rz_next;
   }
   --iterations;
   return false;
+}
+
+// Solves with the factor just computed of the matrix A holds (M + diag(shift), its diagonal
+// shifted already): a double factor directly, a single-precision one by CG (to `tolerance`, 0:
+// kSingleExactTolerance), and where that falls short A is factored in double after all. False
+// when that factorisation fails.
+bool DirectSolver::Impl::solve_factored(const BlockSparseMatrix& M, const VectorX& shift,
+                                        const VectorX& b, VectorX& x, double tolerance,
+                                        DirectSolveStats& stats) {
+  if (factor_single) {
+    const double goal = tolerance > 0 ? tolerance : kSingleExactTolerance;
+    int iterations = 0;
+    const bool solved = cg(M, shift, b, x, goal, kSingleMaxIterations, iterations);
+    stats.cg_iterations += iterations;
+    if (solved) {
+      stats.single = true;
+      return true;
+    }
+    if (!factorize_llt(false)) return false;
+  }
+  solve_with(llt, b, x);
+  return true;
 }
 
 DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& b, VectorX& x,
@@ -363,9 +405,10 @@ DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& 
     return stats;
   }
   if (s.options.reuse_tolerance > 0 && s.kept.try_cg() &&
-      s.reuse(M, b, x, tolerance > 0 ? tolerance : s.options.reuse_tolerance,
-              stats.cg_iterations)) {
+      s.cg(M, {}, b, x, tolerance > 0 ? tolerance : s.options.reuse_tolerance,
+           s.kept.max_iterations(), stats.cg_iterations)) {
     s.kept.record(stats.cg_iterations);
+    stats.single = s.factor_single;
     stats.success = x.allFinite();
     return stats;
   }
@@ -390,10 +433,17 @@ DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& 
   // first then: a Ritz value below zero proves an eigenvalue below zero (it bounds the lowest
   // from above), so LL^T would fail, and is not tried.
   if (shifts && s.shifted) estimate();
-  if (lowest >= 0 && s.factorize_llt()) {
+  const bool single = s.options.precision == FactorPrecision::kSingle;
+  bool positive = lowest >= 0 && s.factorize_llt(single);
+  // A single-precision LL^T also fails on a positive definite A beyond its reach (condition
+  // above about 1e7): LL^T in double decides, unless the estimate proves A indefinite.
+  if (!positive && single && lowest >= 0) {
+    if (shifts && d.size() == 0) estimate();
+    positive = lowest >= 0 && s.factorize_llt(false);
+  }
+  if (positive && s.solve_factored(M, {}, b, x, tolerance, stats)) {
     s.shifted = false;
     s.kept.start(s.analysis.flops, s.analysis.factor_entries);
-    s.solve_with(s.llt, b, x);
   } else if (!shifts) {
     if (!s.factorize_ldlt()) return stats;
     s.solve_with(s.ldlt, b, x);
@@ -401,13 +451,15 @@ DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& 
   } else {
     if (d.size() == 0) estimate();
     double shift = std::max(1e-3, -1.5 * lowest);
-    while (!s.factorize_shifted(d, weight, shift)) {
+    for (;;) {
+      s.shift_diagonal(d, weight, shift);
+      if (s.factorize_llt(single) && s.solve_factored(M, shift * weight, b, x, tolerance, stats))
+        break;
       shift *= 4;
       if (!(shift < 1e3)) return stats;
     }
     s.shifted = true;
     s.kept.start(s.analysis.flops, s.analysis.factor_entries);
-    s.solve_with(s.llt, b, x);
     stats.shift = shift;
   }
   stats.success = x.allFinite();

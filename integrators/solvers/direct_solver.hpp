@@ -21,8 +21,20 @@ enum class IndefiniteFallback {
   kLdlt,   ///< factor A itself by simplicial LDL^T: the exact solution of the indefinite system
 };
 
+/// The precision of the LL^T factor.
+enum class FactorPrecision {
+  kDouble,  ///< factor and solve in double
+  /// Factor in single precision (twice the flops per second of the dense kernels, half the
+  /// bytes) and solve by CG in double preconditioned with it: mixed precision. Where the single
+  /// factorisation of an unshifted A fails but the Lanczos estimate finds no negative eigenvalue
+  /// (A positive definite beyond single precision's reach), and where CG on the single factor
+  /// falls short, A is factored in double.
+  kSingle,
+};
+
 struct DirectSolverOptions {
   DirectOrdering ordering = DirectOrdering::kBest;
+  FactorPrecision precision = FactorPrecision::kDouble;
   IndefiniteFallback indefinite = IndefiniteFallback::kShift;
   /// Solve a new matrix of the same pattern first by CG preconditioned with the kept LL^T factor
   /// of the last one, to |b - A x| <= reuse_tolerance |b|; factor it only when CG needs more
@@ -59,9 +71,12 @@ double lower_triangle_entries(const BlockSparseMatrix& A);
 struct DirectSolveStats {
   bool success = false;   ///< x is finite and solves A x = b (or (A + s I) x = b)
   bool factored = false;  ///< A was factored (false: CG on the kept factor was enough)
-  int cg_iterations = 0;  ///< CG iterations on the kept factor (also when they fell short)
-  double shift = 0;       ///< s of the factored A + s diag|A| (0: A itself)
-  bool ldlt = false;      ///< the LDL^T fallback was used
+  /// CG iterations on the kept factor and on a new single-precision factor (also where they
+  /// fell short)
+  int cg_iterations = 0;
+  bool single = false;  ///< the factor that solved (new or kept) is the single-precision one
+  double shift = 0;     ///< s of the factored A + s diag|A| (0: A itself)
+  bool ldlt = false;    ///< the LDL^T fallback was used
 };
 
 /// Solves A x = b for the symmetric block matrix A. The lower triangle is copied into CHOLMOD's
@@ -81,6 +96,11 @@ struct DirectSolveStats {
 /// F / (40 nnz(L)) iterations, which keeps that mean near its least.
 class DirectSolver {
  public:
+  /// Where CG on a new single-precision factor stops when the solve asks for no tolerance (as
+  /// exact as the solver makes it): about what a double factor's solve reaches on a stiffness
+  /// matrix of condition 1e4.
+  static constexpr double kSingleExactTolerance = 1e-12;
+
   explicit DirectSolver(DirectSolverOptions options = {});
   ~DirectSolver();
   DirectSolver(const DirectSolver&) = delete;
@@ -96,7 +116,8 @@ class DirectSolver {
   /// that factor's ordering and symbolic analysis.
   const DirectAnalysis& analyse(const BlockSparseMatrix& A);
   /// x = A^-1 b (or (A + s diag|A|)^-1 b, see DirectSolveStats::shift). CG on a kept factor
-  /// stops at |b - A x| <= tolerance |b| (0: the options' reuse_tolerance).
+  /// stops at |b - A x| <= tolerance |b| (0: the options' reuse_tolerance); CG on a new single-
+  /// precision factor at tolerance (0: kSingleExactTolerance).
   DirectSolveStats solve(const BlockSparseMatrix& A, const VectorX& b, VectorX& x,
                          double tolerance = 0);
 

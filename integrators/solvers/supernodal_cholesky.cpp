@@ -7,10 +7,29 @@
 #include <atomic>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "integrators/solvers/tiled_blas.hpp"
 
 namespace depthfem {
+
+namespace {
+
+// The arrays of a supernodal CHOLMOD factor (integer version) that place its values.
+struct Layout {
+  int n, nsuper;
+  const int *super, *pi, *px, *rows, *perm;
+  explicit Layout(const cholmod_factor& L)
+      : n(static_cast<int>(L.n)),
+        nsuper(static_cast<int>(L.nsuper)),
+        super(static_cast<const int*>(L.super)),
+        pi(static_cast<const int*>(L.pi)),
+        px(static_cast<const int*>(L.px)),
+        rows(static_cast<const int*>(L.s)),
+        perm(static_cast<const int*>(L.Perm)) {}
+};
+
+}  // namespace
 
 // CHOLMOD's supernodal layout (integer version): supernode s holds the columns
 // super[s] .. super[s+1]-1 of L; its row indices are s[pi[s]] .. s[pi[s+1]-1], ascending, the
@@ -44,12 +63,7 @@ SupernodalCholesky::SupernodalCholesky(const cholmod_sparse& A, cholmod_factor& 
       !cholmod_change_factor(CHOLMOD_REAL, true, true, true, true, &L, &common))
     throw std::runtime_error("CHOLMOD: allocating the supernodal factor failed (status " +
                              std::to_string(common.status) + ")");
-  const int n = static_cast<int>(L.n), nsuper = static_cast<int>(L.nsuper);
-  const int* super = static_cast<const int*>(L.super);
-  const int* pi = static_cast<const int*>(L.pi);
-  const int* px = static_cast<const int*>(L.px);
-  const int* rows = static_cast<const int*>(L.s);
-  const int* perm = static_cast<const int*>(L.Perm);
+  const auto [n, nsuper, super, pi, px, rows, perm] = Layout(L);
 
   super_of_column_.resize(n);
   for (int s = 0; s < nsuper; ++s)
@@ -135,23 +149,30 @@ void SupernodalCholesky::schedule(const cholmod_factor& L) {
   }
 }
 
-bool SupernodalCholesky::factorize_supernode(int s, const cholmod_sparse& A, cholmod_factor& L,
-                                             Workspace& w) const {
+template <class T>
+bool SupernodalCholesky::factorize_supernode(int s, const cholmod_sparse& A,
+                                             const cholmod_factor& L, T* Lx, Workspace& w) const {
   const int* super = static_cast<const int*>(L.super);
   const int* pi = static_cast<const int*>(L.pi);
   const int* px = static_cast<const int*>(L.px);
   const int* rows = static_cast<const int*>(L.s);
   const double* Ax = static_cast<const double*>(A.x);
-  double* Lx = static_cast<double*>(L.x);
   const int k1 = super[s], ncol = super[s + 1] - k1;
   const int* srows = rows + pi[s];
   const int nrow = pi[s + 1] - pi[s];
-  double* Ls = Lx + px[s];
+  T* Ls = Lx + px[s];
+  std::vector<T>& update = [&]() -> std::vector<T>& {
+    if constexpr (std::is_same_v<T, float>) {
+      return w.update_single;
+    } else {
+      return w.update;
+    }
+  }();
 
   // The columns of A.
-  std::fill(Ls, Ls + size_t(nrow) * ncol, 0.0);
+  std::fill(Ls, Ls + size_t(nrow) * ncol, T(0));
   for (size_t e = entry_begin_[s]; e < entry_begin_[s + 1]; ++e)
-    Lx[entry_destination_[e]] = Ax[entry_source_[e]];
+    Lx[entry_destination_[e]] = static_cast<T>(Ax[entry_source_[e]]);
   for (int k = 0; k < nrow; ++k) w.row_map[srows[k]] = k;
 
   // Minus L(k1:, d) L(k1:k2, d)^T for every descendant d whose columns have rows in k1:k2.
@@ -161,12 +182,12 @@ bool SupernodalCholesky::factorize_supernode(int s, const cholmod_sparse& A, cho
     const int* drows = rows + pi[d];
     const int drow = pi[d + 1] - pi[d];
     const int m = drow - first, n = past - first;  // the update is m x n
-    if (w.update.size() < size_t(m) * n) w.update.resize(size_t(m) * n);
-    lower_product(m, n, dcol, 1.0, Lx + px[d] + first, drow, 0.0, w.update.data(), m);
+    if (update.size() < size_t(m) * n) update.resize(size_t(m) * n);
+    lower_product<T>(m, n, dcol, 1, Lx + px[d] + first, drow, 0, update.data(), m);
     for (int i = 0; i < m; ++i) w.relative_map[i] = w.row_map[drows[first + i]];
     const auto subtract = [&](int j) {
-      double* column = Ls + size_t(w.relative_map[j]) * nrow;
-      const double* v = w.update.data() + size_t(j) * m;
+      T* column = Ls + size_t(w.relative_map[j]) * nrow;
+      const T* v = update.data() + size_t(j) * m;
       for (int i = j; i < m; ++i) column[w.relative_map[i]] -= v[i];
     };
     if (double(m) * n < 1 << 16) {  // entries: fewer are not worth a parallel loop
@@ -186,6 +207,17 @@ bool SupernodalCholesky::factorize_supernode(int s, const cholmod_sparse& A, cho
 }
 
 bool SupernodalCholesky::factorize(const cholmod_sparse& A, cholmod_factor& L) {
+  return factorize_into(A, L, static_cast<double*>(L.x));
+}
+
+bool SupernodalCholesky::factorize(const cholmod_sparse& A, cholmod_factor& L,
+                                   std::vector<float>& values) {
+  values.resize(L.xsize);
+  return factorize_into(A, L, values.data());
+}
+
+template <class T>
+bool SupernodalCholesky::factorize_into(const cholmod_sparse& A, cholmod_factor& L, T* Lx) {
   const int nsuper = static_cast<int>(L.nsuper), n = static_cast<int>(L.n);
   const int* super = static_cast<const int*>(L.super);
   // A supernode runs once its children have (its descendants' updates are then final), on
@@ -208,7 +240,7 @@ bool SupernodalCholesky::factorize(const cholmod_sparse& A, cholmod_factor& L) {
       // Isolated: a thread waiting for the supernode's own parallel loops takes no other
       // supernode, which would reuse its workspace.
       const bool ok =
-          tbb::this_task_arena::isolate([&] { return factorize_supernode(s, A, L, w); });
+          tbb::this_task_arena::isolate([&] { return factorize_supernode(s, A, L, Lx, w); });
       if (!ok) {
         for (int f = failed.load();
              w.failed_column < f && !failed.compare_exchange_weak(f, w.failed_column);) {
@@ -222,6 +254,62 @@ bool SupernodalCholesky::factorize(const cholmod_sparse& A, cholmod_factor& L) {
   });
   L.minor = size_t(failed.load());
   return failed.load() == n;
+}
+
+namespace {
+
+// sum a[i] b[i] over i < n in double, in eight interleaved partial sums (one running sum is a
+// chain of dependent additions the compiler may not reorder).
+double dot(const float* a, const double* b, int n) {
+  double part[8] = {};
+  int i = 0;
+  for (; i + 8 <= n; i += 8)
+    for (int k = 0; k < 8; ++k) part[k] += double(a[i + k]) * b[i + k];
+  double sum = 0;
+  for (; i < n; ++i) sum += double(a[i]) * b[i];
+  for (const double p : part) sum += p;
+  return sum;
+}
+
+}  // namespace
+
+// Forward (L y = P b) and backward (L^T z = y, x = P^T z) substitution by supernodes: each
+// supernode's rows of y gathered into a dense vector t, its block applied column by column in
+// double from the single-precision values (contiguous loops), and t scattered back.
+void SupernodalCholesky::solve(const cholmod_factor& L, const std::vector<float>& values,
+                               const double* b, double* x) {
+  const auto [n, nsuper, super, pi, px, rows, perm] = Layout(L);
+  std::vector<double>& y = solve_work_;
+  y.resize(size_t(n));
+  std::vector<double>& t = solve_rows_;
+  for (int k = 0; k < n; ++k) y[k] = b[perm[k]];
+  for (int s = 0; s < nsuper; ++s) {
+    const int k1 = super[s], ncol = super[s + 1] - k1, nrow = pi[s + 1] - pi[s];
+    const int* srows = rows + pi[s];
+    const float* Ls = values.data() + px[s];
+    t.resize(size_t(nrow));
+    for (int i = 0; i < nrow; ++i) t[i] = y[srows[i]];
+    for (int j = 0; j < ncol; ++j) {
+      const float* column = Ls + size_t(j) * nrow;
+      const double tj = t[j] / column[j];
+      t[j] = tj;
+      for (int i = j + 1; i < nrow; ++i) t[i] -= double(column[i]) * tj;
+    }
+    for (int i = 0; i < nrow; ++i) y[srows[i]] = t[i];
+  }
+  for (int s = nsuper - 1; s >= 0; --s) {
+    const int k1 = super[s], ncol = super[s + 1] - k1, nrow = pi[s + 1] - pi[s];
+    const int* srows = rows + pi[s];
+    const float* Ls = values.data() + px[s];
+    t.resize(size_t(nrow));
+    for (int i = 0; i < nrow; ++i) t[i] = y[srows[i]];
+    for (int j = ncol - 1; j >= 0; --j) {
+      const float* column = Ls + size_t(j) * nrow;
+      t[j] = (t[j] - dot(column + j + 1, t.data() + j + 1, nrow - j - 1)) / column[j];
+    }
+    for (int k = 0; k < ncol; ++k) y[k1 + k] = t[k];
+  }
+  for (int k = 0; k < n; ++k) x[perm[k]] = y[k];
 }
 
 }  // namespace depthfem

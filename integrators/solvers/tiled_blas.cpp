@@ -14,12 +14,21 @@ extern "C" {
 void dgemm_(const char* transa, const char* transb, const int* m, const int* n, const int* k,
             const double* alpha, const double* A, const int* lda, const double* B, const int* ldb,
             const double* beta, double* C, const int* ldc);
+void sgemm_(const char* transa, const char* transb, const int* m, const int* n, const int* k,
+            const float* alpha, const float* A, const int* lda, const float* B, const int* ldb,
+            const float* beta, float* C, const int* ldc);
 void dsyrk_(const char* uplo, const char* trans, const int* n, const int* k, const double* alpha,
             const double* A, const int* lda, const double* beta, double* C, const int* ldc);
+void ssyrk_(const char* uplo, const char* trans, const int* n, const int* k, const float* alpha,
+            const float* A, const int* lda, const float* beta, float* C, const int* ldc);
 void dtrsm_(const char* side, const char* uplo, const char* transa, const char* diag, const int* m,
             const int* n, const double* alpha, const double* A, const int* lda, double* B,
             const int* ldb);
+void strsm_(const char* side, const char* uplo, const char* transa, const char* diag, const int* m,
+            const int* n, const float* alpha, const float* A, const int* lda, float* B,
+            const int* ldb);
 void dpotrf_(const char* uplo, const int* n, double* A, const int* lda, int* info);
+void spotrf_(const char* uplo, const int* n, float* A, const int* lda, int* info);
 }
 
 namespace depthfem {
@@ -35,10 +44,45 @@ void cut(int begin, int end, std::vector<int>& bounds) {
   bounds.push_back(end);
 }
 
+// The BLAS routine of each precision under one name.
+void gemm_nt(int m, int n, int k, double alpha, const double* A, int lda, const double* B, int ldb,
+             double beta, double* C, int ldc) {
+  dgemm_("N", "T", &m, &n, &k, &alpha, A, &lda, B, &ldb, &beta, C, &ldc);
+}
+void gemm_nt(int m, int n, int k, float alpha, const float* A, int lda, const float* B, int ldb,
+             float beta, float* C, int ldc) {
+  sgemm_("N", "T", &m, &n, &k, &alpha, A, &lda, B, &ldb, &beta, C, &ldc);
+}
+void syrk_ln(int n, int k, double alpha, const double* A, int lda, double beta, double* C,
+             int ldc) {
+  dsyrk_("L", "N", &n, &k, &alpha, A, &lda, &beta, C, &ldc);
+}
+void syrk_ln(int n, int k, float alpha, const float* A, int lda, float beta, float* C, int ldc) {
+  ssyrk_("L", "N", &n, &k, &alpha, A, &lda, &beta, C, &ldc);
+}
+void trsm_rltn(int m, int n, const double* L, int ldl, double* B, int ldb) {
+  const double one = 1;
+  dtrsm_("R", "L", "T", "N", &m, &n, &one, L, &ldl, B, &ldb);
+}
+void trsm_rltn(int m, int n, const float* L, int ldl, float* B, int ldb) {
+  const float one = 1;
+  strsm_("R", "L", "T", "N", &m, &n, &one, L, &ldl, B, &ldb);
+}
+int potrf_l(int n, double* A, int lda) {
+  int info = 0;
+  dpotrf_("L", &n, A, &lda, &info);
+  return info;
+}
+int potrf_l(int n, float* A, int lda) {
+  int info = 0;
+  spotrf_("L", &n, A, &lda, &info);
+  return info;
+}
+
 }  // namespace
 
-void lower_product(int m, int n, int k, double alpha, const double* A, int lda, double beta,
-                   double* C, int ldc) {
+template <class T>
+void lower_product(int m, int n, int k, T alpha, const T* A, int lda, T beta, T* C, int ldc) {
   if (m <= 0 || n <= 0) return;
   // Rows cut at the columns' cuts down to n, then below; tile (I, J) for row part I >= column
   // part J: a square of the diagonal (dsyrk) for I = J, else a rectangle (dgemm).
@@ -60,11 +104,11 @@ void lower_product(int m, int n, int k, double alpha, const double* A, int lda, 
   const auto tile = [&](size_t t) {
     const auto [I, J] = tiles[t];
     const int r0 = rows[I], mr = rows[I + 1] - r0, c0 = rows[J], nc = rows[J + 1] - c0;
-    double* out = C + r0 + std::size_t(c0) * ldc;
+    T* out = C + r0 + std::size_t(c0) * ldc;
     if (I == J) {
-      dsyrk_("L", "N", &nc, &k, &alpha, A + c0, &lda, &beta, out, &ldc);
+      syrk_ln(nc, k, alpha, A + c0, lda, beta, out, ldc);
     } else {
-      dgemm_("N", "T", &mr, &nc, &k, &alpha, A + r0, &lda, A + c0, &lda, &beta, out, &ldc);
+      gemm_nt(mr, nc, k, alpha, A + r0, lda, A + c0, lda, beta, out, ldc);
     }
   };
   if (tiles.size() <= 2) {
@@ -74,9 +118,9 @@ void lower_product(int m, int n, int k, double alpha, const double* A, int lda, 
   }
 }
 
-void solve_right_lower_transposed(int m, int n, const double* L, int ldl, double* B, int ldb) {
+template <class T>
+void solve_right_lower_transposed(int m, int n, const T* L, int ldl, T* B, int ldb) {
   if (m <= 0 || n <= 0) return;
-  const double one = 1;
   // Each row of B is solved on its own: parts of rows.
   std::vector<int> rows;
   if (double(m) * n * n < 2 * kBlasTiledWork) {
@@ -84,10 +128,7 @@ void solve_right_lower_transposed(int m, int n, const double* L, int ldl, double
   } else {
     cut(0, m, rows);
   }
-  const auto part = [&](int I) {
-    const int mr = rows[I + 1] - rows[I];
-    dtrsm_("R", "L", "T", "N", &mr, &n, &one, L, &ldl, B + rows[I], &ldb);
-  };
+  const auto part = [&](int I) { trsm_rltn(rows[I + 1] - rows[I], n, L, ldl, B + rows[I], ldb); };
   if (rows.size() == 2) {
     part(0);
   } else {
@@ -95,24 +136,28 @@ void solve_right_lower_transposed(int m, int n, const double* L, int ldl, double
   }
 }
 
-int cholesky_lower(int n, double* A, int lda) {
-  int info = 0;
-  if (n <= kBlasTile) {
-    dpotrf_("L", &n, A, &lda, &info);
-    return info;
-  }
+template <class T>
+int cholesky_lower(int n, T* A, int lda) {
+  if (n <= kBlasTile) return potrf_l(n, A, lda);
   // Recursively by halves (LAPACK's recursive scheme): factor the leading block, solve the
   // rows below it, update the trailing block by them (the bulk of the work: one large product,
   // in tiles), factor that.
   const int n1 = n / 2 / 8 * 8, n2 = n - n1;
-  info = cholesky_lower(n1, A, lda);
+  int info = cholesky_lower(n1, A, lda);
   if (info != 0) return info;
-  double* below = A + n1;
+  T* below = A + n1;
   solve_right_lower_transposed(n2, n1, A, lda, below, lda);
-  double* trailing = below + std::size_t(n1) * lda;
-  lower_product(n2, n2, n1, -1.0, below, lda, 1.0, trailing, lda);
+  T* trailing = below + std::size_t(n1) * lda;
+  lower_product<T>(n2, n2, n1, -1, below, lda, 1, trailing, lda);
   info = cholesky_lower(n2, trailing, lda);
   return info != 0 ? n1 + info : 0;
 }
+
+template void lower_product(int, int, int, double, const double*, int, double, double*, int);
+template void lower_product(int, int, int, float, const float*, int, float, float*, int);
+template void solve_right_lower_transposed(int, int, const double*, int, double*, int);
+template void solve_right_lower_transposed(int, int, const float*, int, float*, int);
+template int cholesky_lower(int, double*, int);
+template int cholesky_lower(int, float*, int);
 
 }  // namespace depthfem

@@ -19,14 +19,17 @@ inline constexpr double kBlasTiledWork = double(kBlasTile) * kBlasTile * 32;
 /// C(i, j) = beta C(i, j) + alpha sum_l A(i, l) A(j, l) for i >= j: the lower trapezoid of the
 /// m x n block C (m >= n, leading dimension ldc); A is m x k (lda), its first n rows are the
 /// columns' factors. (dsyrk on the top n x n, dgemm below it; nothing above the diagonal.)
-void lower_product(int m, int n, int k, double alpha, const double* A, int lda, double beta,
-                   double* C, int ldc);
+/// T is double or float (a single-precision factor, DirectSolverOptions::precision).
+template <class T>
+void lower_product(int m, int n, int k, T alpha, const T* A, int lda, T beta, T* C, int ldc);
 
 /// B = B L^-T: L is n x n lower triangular (ldl), B is m x n (ldb). (dtrsm "R", "L", "T", "N".)
-void solve_right_lower_transposed(int m, int n, const double* L, int ldl, double* B, int ldb);
+template <class T>
+void solve_right_lower_transposed(int m, int n, const T* L, int ldl, T* B, int ldb);
 
 /// The lower triangle of the n x n symmetric A (lda) is overwritten by L, A = L L^T. Returns 0,
 /// or as LAPACK's dpotrf the 1-based column whose pivot is not positive (L is then partial).
-int cholesky_lower(int n, double* A, int lda);
+template <class T>
+int cholesky_lower(int n, T* A, int lda);
 
 }  // namespace depthfem

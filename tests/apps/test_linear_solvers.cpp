@@ -1,6 +1,7 @@
-// The shipped static scenes solved with AMG-CG and with the direct solver reach the same
-// equilibrium: the Newton tolerance, not the linear solver, decides the solution. Where the
-// equilibrium is not unique (past a bifurcation) both must reach one of the same kind.
+// The shipped static scenes solved with AMG-CG, with the direct solver and with the direct
+// solver's single-precision factor (CG in double on it) reach the same equilibrium: the Newton
+// tolerance, not the linear solver, decides the solution. Where the equilibrium is not unique (past
+// a bifurcation) both must reach one of the same kind.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -19,7 +20,7 @@ struct Case {
   bool unique = true;                  // false: buckles, the branch taken depends on round-off
 };
 
-TEST(LinearSolvers, AmgAndDirectAgreeOnTheStaticScenes) {
+TEST(LinearSolvers, AmgDirectAndSingleFactorAgreeOnTheStaticScenes) {
   const std::vector<Case> cases = {
       {"cantilever_gravity", {}},
       {"uniaxial_block", {}},
@@ -35,17 +36,23 @@ TEST(LinearSolvers, AmgAndDirectAgreeOnTheStaticScenes) {
   };
   for (const Case& c : cases) {
     std::vector<RunResult> r;
-    for (const char* solver : {"direct", "amg"}) {
+    for (const char* solver : {"direct", "amg", "direct_single"}) {
       std::vector<std::string> o = c.overrides;
-      o.push_back(std::string("solver.linear_solver=") + solver);
+      const bool single = std::string(solver) == "direct_single";
+      o.push_back(std::string("solver.linear_solver=") + (single ? "direct" : solver));
+      if (single) o.push_back("solver.direct_precision=single");
       r.push_back(run(load(c.scene, o)));
       ASSERT_TRUE(r.back().success) << c.scene << " " << solver << ": " << r.back().message;
     }
     const Scene s = load(c.scene, c.overrides);
     const double moved = (r[0].x - s.mesh.X).rowwise().norm().maxCoeff();
     const double apart = (r[1].x - r[0].x).rowwise().norm().maxCoeff();
-    std::printf("%s: largest displacement %.3e m, solutions apart %.3e m, energies %.9e %.9e\n",
-                c.scene, moved, apart, r[0].steps.back().energy, r[1].steps.back().energy);
+    const double single_apart = (r[2].x - r[0].x).rowwise().norm().maxCoeff();
+    std::printf(
+        "%s: largest displacement %.3e m, AMG and single factor %.3e and %.3e m from direct, "
+        "energies %.9e %.9e %.9e\n",
+        c.scene, moved, apart, single_apart, r[0].steps.back().energy, r[1].steps.back().energy,
+        r[2].steps.back().energy);
     if (!c.unique) {
       // Buckled (the straight column only shortens: lateral motion below 1 mm; its test).
       for (const RunResult& b : r)
@@ -60,6 +67,7 @@ TEST(LinearSolvers, AmgAndDirectAgreeOnTheStaticScenes) {
     // AMG, more than 30 with the direct solver, which cuts it into two); the equilibria at the
     // loads both reach agree (fold_slab: energies equal to seven digits at each of them).
     EXPECT_LE(apart, 1e-5 * moved) << c.scene;
+    EXPECT_LE(single_apart, 1e-5 * moved) << c.scene << " (single-precision factor)";
   }
 }
 

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 #include <petscsys.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -359,7 +361,9 @@ TEST(LinearSolver, DirectKeepsItsOrderingWhereTheFlopsBarelyGrow) {
     const DirectAnalysis& after = solver.analyse(grown);
     EXPECT_EQ(after.refitted, 0) << "the coupling lies outside the factor";
     EXPECT_EQ(after.reanalysed, kept ? 1 : 0);
-    if (kept) EXPECT_LE(after.flops, 1.02 * flops);
+    if (kept) {
+      EXPECT_LE(after.flops, 1.02 * flops);
+    }
     EXPECT_LE(residual(grown, x, p.b), 1e-12);
   }
 }
@@ -368,6 +372,77 @@ TEST(LinearSolver, DirectKeepsItsOrderingWhereTheFlopsBarelyGrow) {
 // same (AMD) ordering, an independent count: a block column of c blocks expands into three
 // columns of about 3c entries, so 27 times the block graph's flops, slightly above the scalar
 // count (measured 1.006 to 1.02 on the cantilever from 40 to 80 cells; 1.10 allowed).
+DirectSolverOptions single_precision() {
+  DirectSolverOptions o;
+  o.precision = FactorPrecision::kSingle;
+  return o;
+}
+
+// A single-precision factor solves by CG in double to the asked tolerance: an exact solve
+// (tolerance 0) to kSingleExactTolerance, agreeing with the double factor's solution to the
+// condition number (below 1e4 here) times that; a loose one to its tolerance in fewer
+// iterations.
+TEST(LinearSolver, DirectSingleFactorSolvesToTheAskedTolerance) {
+  const Problem p = clamped_block(0.0, {12, 4, 4});
+  DirectSolver double_solver, exact(single_precision()), loose(single_precision());
+  VectorX reference, x, y;
+  ASSERT_TRUE(double_solver.solve(p.A, p.b, reference).success);
+  const DirectSolveStats e = exact.solve(p.A, p.b, x);
+  ASSERT_TRUE(e.success && e.factored && e.single);
+  EXPECT_LE(residual(p.A, x, p.b), DirectSolver::kSingleExactTolerance);
+  EXPECT_LE((x - reference).norm(), 1e-8 * reference.norm());
+  const DirectSolveStats l = loose.solve(p.A, p.b, y, 1e-3);
+  ASSERT_TRUE(l.success && l.single);
+  EXPECT_LE(residual(p.A, y, p.b), 1e-3);
+  EXPECT_LT(l.cg_iterations, e.cg_iterations);
+}
+
+// An indefinite matrix: the single-precision LL^T fails where the double one does, and the
+// shifted matrix gets the same shift (the same estimate and ladder) and its solution to the
+// tolerance.
+TEST(LinearSolver, DirectSingleFactorShiftsAsTheDoubleOne) {
+  const Problem p = clamped_block(2e3);
+  DirectSolver double_solver, single_solver(single_precision());
+  VectorX reference, x;
+  const DirectSolveStats d = double_solver.solve(p.A, p.b, reference);
+  const DirectSolveStats s = single_solver.solve(p.A, p.b, x);
+  ASSERT_GT(d.shift, 0.0);
+  ASSERT_TRUE(s.success && s.single);
+  EXPECT_EQ(s.shift, d.shift);
+  EXPECT_LE((x - reference).norm(), 1e-8 * reference.norm());
+}
+
+// A positive definite matrix of condition about 1e9 (the block's free part shifted down to 1e-9
+// of its largest eigenvalue), beyond single precision's reach: the solver falls back to the
+// double factor and solves A itself, unshifted.
+TEST(LinearSolver, DirectSingleFactorFallsBackToDoubleBeyondItsReach) {
+  Problem p = clamped_block(0.0);
+  const std::vector<char> clamped = clamped_nodes(p.A);
+  std::vector<Index> free_dofs;
+  for (Index i = 0; i < p.A.num_nodes(); ++i)
+    if (!clamped[static_cast<size_t>(i)])
+      for (Index d = 0; d < 3; ++d) free_dofs.push_back(3 * i + d);
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(p.b.size(), p.b.size());
+  for (Index i = 0; i < p.A.num_nodes(); ++i)
+    for (Index k = p.A.row_begin(i); k < p.A.row_begin(i + 1); ++k)
+      dense.block<3, 3>(3 * i, 3 * p.A.block_col(k)) = p.A.block(k);
+  Eigen::MatrixXd free(free_dofs.size(), free_dofs.size());
+  for (size_t a = 0; a < free_dofs.size(); ++a)
+    for (size_t b = 0; b < free_dofs.size(); ++b) free(a, b) = dense(free_dofs[a], free_dofs[b]);
+  const VectorX eigenvalues = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(free).eigenvalues();
+  const double lowest = eigenvalues(0), largest = eigenvalues(eigenvalues.size() - 1);
+  for (Index i = 0; i < p.A.num_nodes(); ++i)
+    if (!clamped[static_cast<size_t>(i)])
+      p.A.block(p.A.block_index(i, i)).diagonal().array() -= lowest - 1e-9 * largest;
+  DirectSolver solver(single_precision());
+  VectorX x;
+  const DirectSolveStats s = solver.solve(p.A, p.b, x);
+  ASSERT_TRUE(s.success);
+  EXPECT_FALSE(s.single);
+  EXPECT_EQ(s.shift, 0.0);
+  EXPECT_LE(residual(p.A, x, p.b), 1e-6);
+}
+
 TEST(LinearSolver, PredictedFactorFlopsMatchTheScalarAnalysis) {
   const Problem p = clamped_block(0.0);
   DirectSolver direct({DirectOrdering::kAmd});
