@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "core/error.hpp"
+#include "integrators/solvers/ranks.hpp"
 
 namespace depthfem {
 
@@ -35,16 +36,20 @@ Points ImplicitStepper::initial_acceleration(const Points& x, const Points& v) {
   if (!std::isfinite(system.hessian(x, g)))
     throw SolveError("the initial configuration is illegal");
   constraints.project(g);
-  // M a = -g on the free directions: the mass matrix alone, in the System's pattern.
+  // M a = -g on the free directions: the mass matrix alone, in the System's pattern. In a
+  // distributed run rank 0 adds the mass matrix (it evaluates the inertia, a whole module) and
+  // every rank its part of nothing else; MUMPS solves the sum, and a is whole on every rank.
   BlockSparseMatrix M = system.matrix();
   M.set_zero();
   terms_.inertia->set_scale(1.0);
-  terms_.inertia->evaluate(x, nullptr, &M);
+  Ranks* ranks = system.ranks();
+  if (!ranks || ranks->rank() == 0) terms_.inertia->evaluate(x, nullptr, &M);
   constraints.project(M);
   VectorX a;
   LinearSolverOptions direct_options;
   direct_options.kind = LinearSolverKind::kDirect;
   LinearSolver direct(direct_options);
+  if (ranks) direct.distribute(*ranks);
   if (!direct.solve(M, -g, a).reached_tolerance || !a.allFinite())
     throw SolveError("the mass matrix is singular on the free directions");
   return as_points(a);
