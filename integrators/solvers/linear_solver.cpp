@@ -211,7 +211,7 @@ LinearSolveStats LinearSolver::cg(const BlockSparseMatrix& A, const VectorX& b, 
   return {k, rel, rel <= options_.tolerance};
 }
 
-// Iterations: one per factorisation plus the CG iterations on a kept factor.
+// Iterations: one per factorisation plus the CG iterations on a kept or single-precision factor.
 LinearSolveStats LinearSolver::direct(const BlockSparseMatrix& A, const VectorX& b, VectorX& x,
                                       double tolerance) {
   if (!direct_) {

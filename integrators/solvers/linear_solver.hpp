@@ -41,7 +41,7 @@ struct LinearSolverOptions {
 
 /// What a solve did.
 struct LinearSolveStats {
-  int iterations = 0;              ///< iterative: matrix products; direct: 1
+  int iterations = 0;  ///< iterative: matrix products; direct: factorisations + CG iterations
   double relative_residual = 0;    ///< |b - A x| / |b|
   bool reached_tolerance = false;  ///< iterative: tolerance met; direct: factorisation succeeded
   double shift = 0;                ///< direct: s of the factored A + s diag|A| (A indefinite)
