@@ -51,7 +51,7 @@ TEST(KneeScene, LoadsBodiesRegionsAndConditions) {
 // The fine variant: the same conditions, contact, materials and solver options on a mesh of more
 // than three times the tets (Newton's cap per increment too: capped at the default 30, the fine
 // run failed at 148.9 degrees, bench/results/knee.md), but for the direct solver's factor in
-// single precision (its factorisations are 85 % of the run; the same end state in 20 % less
+// single precision (its factorisations are 85 % of the run; the same end state in 14-20 % less
 // time, bench/results/knee.md, sixth round). A run of it is a benchmark: bench/knee_flexion.sh.
 TEST(KneeScene, FineVariantDiffersInItsMeshAndFactorPrecisionAlone) {
   const Scene coarse = load("knee_flexion"), fine = load("knee_flexion_fine");
