@@ -112,10 +112,9 @@ SupernodalCholesky::SupernodalCholesky(const cholmod_sparse& A, cholmod_factor& 
 // Each supernode's sum of updates is then the one of that loop, whatever order the supernodes
 // run in.
 void SupernodalCholesky::schedule(const cholmod_factor& L) {
-  const int nsuper = static_cast<int>(L.nsuper);
-  const int* super = static_cast<const int*>(L.super);
-  const int* pi = static_cast<const int*>(L.pi);
-  const int* rows = static_cast<const int*>(L.s);
+  const Layout layout(L);
+  const int nsuper = layout.nsuper;
+  const int *super = layout.super, *pi = layout.pi, *rows = layout.rows;
   std::vector<int> head(nsuper, -1), next(nsuper), position(nsuper);
   parent_.assign(nsuper, -1);
   children_.assign(nsuper, 0);
@@ -152,10 +151,8 @@ void SupernodalCholesky::schedule(const cholmod_factor& L) {
 template <class T>
 bool SupernodalCholesky::factorize_supernode(int s, const cholmod_sparse& A,
                                              const cholmod_factor& L, T* Lx, Workspace& w) const {
-  const int* super = static_cast<const int*>(L.super);
-  const int* pi = static_cast<const int*>(L.pi);
-  const int* px = static_cast<const int*>(L.px);
-  const int* rows = static_cast<const int*>(L.s);
+  const Layout layout(L);
+  const int *super = layout.super, *pi = layout.pi, *px = layout.px, *rows = layout.rows;
   const double* Ax = static_cast<const double*>(A.x);
   const int k1 = super[s], ncol = super[s + 1] - k1;
   const int* srows = rows + pi[s];
@@ -218,8 +215,9 @@ bool SupernodalCholesky::factorize(const cholmod_sparse& A, cholmod_factor& L,
 
 template <class T>
 bool SupernodalCholesky::factorize_into(const cholmod_sparse& A, cholmod_factor& L, T* Lx) {
-  const int nsuper = static_cast<int>(L.nsuper), n = static_cast<int>(L.n);
-  const int* super = static_cast<const int*>(L.super);
+  const Layout layout(L);
+  const int nsuper = layout.nsuper, n = layout.n;
+  const int* super = layout.super;
   // A supernode runs once its children have (its descendants' updates are then final), on
   // the thread that finished the last of them; the leaves start in parallel. A failed pivot
   // stops the supernodes past its column from starting: those before it still run, so the
