@@ -119,8 +119,6 @@ struct DirectSolver::Impl {
   double ordered_flops = 0;    // of the pattern the ordering perm was computed for
   KeptFactor kept;             // llt, kept for the matrices of this pattern after the factored one
   bool shifted = false;        // the last factorisation was of a shifted matrix
-  double last_shift = 0;       // the shift of the last shifted factorisation
-  long factorizations = 0;     // tried, the failed ones included
   std::vector<float> single;   // llt's values in single precision (FactorPrecision::kSingle)
   bool factor_single = false;  // llt's factor is `single` (else llt->x)
   cholmod_dense *X = nullptr, *Y = nullptr, *E = nullptr;  // solve workspace
@@ -288,7 +286,6 @@ void DirectSolver::Impl::order(const BlockSparseMatrix& M) {
 // OpenBLAS's threads, which make the factor depend on the thread count (SupernodalCholesky
 // shares them by TBB, each on one BLAS thread).
 bool DirectSolver::Impl::factorize_llt(bool in_single) {
-  ++factorizations;
   const SerialBlas serial;
   factor_single = in_single;
   return in_single ? llt_numeric->factorize(*A, *llt, single) : llt_numeric->factorize(*A, *llt);
@@ -296,7 +293,6 @@ bool DirectSolver::Impl::factorize_llt(bool in_single) {
 
 // Factors A into ldlt (simplicial: no BLAS); false when it has a zero pivot.
 bool DirectSolver::Impl::factorize_ldlt() {
-  ++factorizations;
   if (!ldlt) ldlt = analyse_with(CHOLMOD_SIMPLICIAL);
   cholmod_factorize(A, ldlt, &c);
   check("factorization");
@@ -337,10 +333,6 @@ void DirectSolver::set_decoupled_nodes(std::vector<char> nodes) {
   if (nodes == impl_->decoupled) return;
   impl_->release_pattern();
   impl_->decoupled = std::move(nodes);
-}
-
-long DirectSolver::factorizations_tried() const {
-  return impl_->factorizations;
 }
 
 const DirectAnalysis& DirectSolver::analyse(const BlockSparseMatrix& M) {
@@ -425,10 +417,7 @@ DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& 
   s.kept.drop();
   // A + s D, D the diagonal of |A| (floored at 1e-12 of its largest entry), with s just past the
   // lowest eigenvalue of D^-1/2 A D^-1/2: a Lanczos estimate of it (from above, so 1.5 times
-  // its size, and at least 1e-3), raised fourfold until the factorisation succeeds. After a
-  // shifted factorisation the ladder starts no lower than a quarter of that shift: Newton's
-  // successive matrices are close, and 30 Lanczos steps often miss a negative eigenvalue near
-  // the dense low end of the spectrum, so that the ladder would climb from 1e-3 again. Each dof is
+  // its size, and at least 1e-3), raised fourfold until the factorisation succeeds. Each dof is
   // stiffened in proportion to its own stiffness: a soft tissue beside a stiff bone or a strong
   // penalty keeps nearly its Newton step, where a shift s I large enough for the stiff dofs
   // would freeze it. The shifted solve is invariant under a rescaling of the dofs.
@@ -462,7 +451,6 @@ DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& 
   } else {
     if (d.size() == 0) estimate();
     double shift = std::max(1e-3, -1.5 * lowest);
-    if (s.shifted) shift = std::max(shift, s.last_shift / 4);
     for (;;) {
       s.shift_diagonal(d, weight, shift);
       if (s.factorize_llt(single) && s.solve_factored(M, shift * weight, b, x, tolerance, stats))
@@ -471,7 +459,6 @@ DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& 
       if (!(shift < 1e3)) return stats;
     }
     s.shifted = true;
-    s.last_shift = shift;
     s.kept.start(s.analysis.flops, s.analysis.factor_entries);
     stats.shift = shift;
   }

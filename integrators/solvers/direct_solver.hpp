@@ -120,9 +120,6 @@ class DirectSolver {
   /// precision factor at tolerance (0: kSingleExactTolerance).
   DirectSolveStats solve(const BlockSparseMatrix& A, const VectorX& b, VectorX& x,
                          double tolerance = 0);
-  /// The factorisations tried so far (LL^T in either precision and LDL^T, the failed ones
-  /// included): what the shifted solves cost beyond their count.
-  long factorizations_tried() const;
 
  private:
   struct Impl;

@@ -210,50 +210,6 @@ TEST(LinearSolver, DirectSolvesAfterAShiftAsAFreshSolverWould) {
   EXPECT_LE(residual(definite.A, x, definite.b), 1e-10);  // shift 0: the exact solution
 }
 
-// A chain of `nodes` nodes, each coupled to the next by -I, with 2 I on the diagonal but for
-// the middle node's (2 - defect) I. The Jacobi-scaled chain's eigenvalues, 1 - cos(k pi /
-// (nodes + 1)), are dense near 0; the defect binds one localized mode below them, which 30 Lanczos
-// steps from a random start do not resolve.
-BlockSparseMatrix chain_with_defect(Index nodes, double defect) {
-  SparsityBuilder builder(nodes);
-  for (Index i = 0; i + 1 < nodes; ++i) builder.add_clique(std::vector<Index>{i, i + 1});
-  BlockSparseMatrix A(builder);
-  for (Index i = 0; i < nodes; ++i)
-    for (Index k = A.row_begin(i); k < A.row_begin(i + 1); ++k)
-      A.block(k) = (A.block_col(k) != i ? -1.0
-                    : i == nodes / 2    ? 2 - defect
-                                        : 2.0) *
-                   Mat3::Identity();
-  return A;
-}
-
-TEST(LinearSolver, DirectShiftLadderStartsAQuarterBelowTheLastShift) {
-  // With the bound mode's eigenvalue between -0.016 and -0.004 and the Lanczos estimate above
-  // -1e-3 / 1.5, a fresh solver tries LL^T of A (which fails), then climbs the ladder 1e-3,
-  // 4e-3, 0.016. A solver that has just shifted the same matrix by 0.016 starts at a quarter of
-  // it, 4e-3: the same shift and bitwise the same solution for one factorisation less.
-  const BlockSparseMatrix A = chain_with_defect(3000, 0.2);
-  const VectorX b = VectorX::LinSpaced(9000, -1, 1);
-  DirectSolverOptions factor_always;
-  factor_always.reuse_tolerance = 0;  // no CG on the kept factor: every matrix is factored
-  DirectSolver kept(factor_always), fresh(factor_always);
-  VectorX x, y;
-  const DirectSolveStats first = kept.solve(A, b, x);
-  ASSERT_TRUE(first.success);
-  ASSERT_EQ(kept.factorizations_tried(), 4);  // the climb from 1e-3 this test is about
-  EXPECT_DOUBLE_EQ(first.shift, 0.016);
-  const DirectSolveStats again = kept.solve(A, b, x), alone = fresh.solve(A, b, y);
-  EXPECT_EQ(again.shift, alone.shift);
-  EXPECT_EQ(x, y);
-  EXPECT_EQ(fresh.factorizations_tried(), 4);
-  EXPECT_EQ(kept.factorizations_tried() - 4, 3);
-  // x solves the shifted system (A + s diag|A|) x = b.
-  VectorX Ax;
-  A.multiply(x, Ax);
-  EXPECT_LE((b - Ax - again.shift * A.diagonal().cwiseAbs().cwiseProduct(x)).norm(),
-            1e-10 * b.norm());
-}
-
 TEST(LinearSolver, DirectShiftIsInvariantUnderRescalingTheDofs) {
   // A stiff region beside a soft one (a bone beside soft tissue, a penalty beside both): the
   // congruence S A S with S = diag(1000 on half the nodes, 1 on the rest) has the same inertia,
