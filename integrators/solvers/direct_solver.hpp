@@ -69,7 +69,7 @@ double lower_triangle_entries(const BlockSparseMatrix& A);
 
 /// What one direct solve did.
 struct DirectSolveStats {
-  bool success = false;   ///< x is finite and solves A x = b (or (A + s I) x = b)
+  bool success = false;   ///< x is finite and solves A x = b (or (A + s diag|A|) x = b)
   bool factored = false;  ///< A was factored (false: CG on the kept factor was enough)
   /// CG iterations on the kept factor and on a new single-precision factor (also where they
   /// fell short)

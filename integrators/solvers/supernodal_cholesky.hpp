@@ -81,8 +81,8 @@ class SupernodalCholesky {
   std::vector<int> parent_;                // in the supernodal elimination tree (-1: a root)
   std::vector<int> children_;              // in that tree
   tbb::enumerable_thread_specific<Workspace> workspaces_;
-  std::vector<double> solve_work_,
-      solve_rows_;  // solve(): the permuted vector, one supernode's rows
+  std::vector<double> solve_work_;  // solve(): the permuted vector
+  std::vector<double> solve_rows_;  // solve(): one supernode's rows
 };
 
 }  // namespace depthfem

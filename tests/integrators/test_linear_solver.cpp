@@ -368,10 +368,6 @@ TEST(LinearSolver, DirectKeepsItsOrderingWhereTheFlopsBarelyGrow) {
   }
 }
 
-// The prediction from the block graph against CHOLMOD's analysis of the scalar pattern with the
-// same (AMD) ordering, an independent count: a block column of c blocks expands into three
-// columns of about 3c entries, so 27 times the block graph's flops, slightly above the scalar
-// count (measured 1.006 to 1.02 on the cantilever from 40 to 80 cells; 1.10 allowed).
 DirectSolverOptions single_precision() {
   DirectSolverOptions o;
   o.precision = FactorPrecision::kSingle;
@@ -443,6 +439,10 @@ TEST(LinearSolver, DirectSingleFactorFallsBackToDoubleBeyondItsReach) {
   EXPECT_LE(residual(p.A, x, p.b), 1e-6);
 }
 
+// The prediction from the block graph against CHOLMOD's analysis of the scalar pattern with the
+// same (AMD) ordering, an independent count: a block column of c blocks expands into three
+// columns of about 3c entries, so 27 times the block graph's flops, slightly above the scalar
+// count (measured 1.006 to 1.02 on the cantilever from 40 to 80 cells; 1.10 allowed).
 TEST(LinearSolver, PredictedFactorFlopsMatchTheScalarAnalysis) {
   const Problem p = clamped_block(0.0);
   DirectSolver direct({DirectOrdering::kAmd});
