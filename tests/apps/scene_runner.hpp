@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "apps/run_scene.hpp"
+#include "core/results_file.hpp"
 
 namespace depthfem::testing {
 
@@ -21,14 +22,17 @@ inline std::string temp_path(const std::string& name) {
       .string();
 }
 
-/// A results file at temp_path(name + ".h5"), removed with its sidecar when the test ends.
+/// Removes results file `path` and the sidecars written beside it.
+inline void remove_results(const std::string& path) {
+  std::filesystem::remove(path);
+  for (const std::string& sidecar : results_sidecars(path)) std::filesystem::remove(sidecar);
+}
+
+/// A results file at temp_path(name + ".h5"), removed with its sidecars when the test ends.
 struct TemporaryResults {
   std::string path;
   explicit TemporaryResults(const std::string& name) : path(temp_path(name + ".h5")) {}
-  ~TemporaryResults() {
-    std::filesystem::remove(path);
-    std::filesystem::remove(std::filesystem::path(path).replace_extension(".xmf"));
-  }
+  ~TemporaryResults() { remove_results(path); }
   TemporaryResults(const TemporaryResults&) = delete;
   TemporaryResults& operator=(const TemporaryResults&) = delete;
 };

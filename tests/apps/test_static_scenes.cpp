@@ -162,8 +162,7 @@ TEST(StaticScenes, FailedRunKeepsCompletedIncrements) {
   EXPECT_EQ(summary.num_steps, static_cast<Index>(r.steps.size()));
   EXPECT_EQ(summary.message, r.message);
   EXPECT_EQ((read_step_positions(out, summary.num_steps - 1) - r.x).cwiseAbs().maxCoeff(), 0.0);
-  std::filesystem::remove(out);
-  std::filesystem::remove(std::filesystem::path(out).replace_extension(".xmf"));
+  testing::remove_results(out);
 }
 
 // Every failed attempt prints one line (a failed attempt completes no step, so this is all a
