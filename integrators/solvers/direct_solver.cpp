@@ -218,6 +218,7 @@ bool DirectSolver::Impl::refit(const BlockSparseMatrix& M, cholmod_sparse* next)
   if (!llt || next->nrow != llt->n) return false;
   std::unique_ptr<SupernodalCholesky> numeric = SupernodalCholesky::fitted(*next, *llt, c);
   if (!numeric) return false;
+  numeric->keep_probes_of(*llt_numeric);
   cholmod_free_sparse(&A, &c);
   cholmod_free_factor(&ldlt, &c);
   A = next;

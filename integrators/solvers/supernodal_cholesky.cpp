@@ -223,35 +223,71 @@ bool SupernodalCholesky::factorize_into(const cholmod_sparse& A, cholmod_factor&
   // stops the supernodes past its column from starting: those before it still run, so the
   // first failing column is the one of the sequential loop.
   std::vector<std::atomic<int>> waiting(static_cast<size_t>(nsuper));
-  std::vector<int> leaves;
-  for (int s = 0; s < nsuper; ++s) {
-    waiting[s].store(children_[s], std::memory_order_relaxed);
-    if (children_[s] == 0) leaves.push_back(s);
-  }
-  std::atomic<int> failed{n};
-  tbb::parallel_for(size_t(0), leaves.size(), [&](size_t i) {
-    Workspace& w = workspaces_.local();
-    w.row_map.resize(size_t(n));
-    w.relative_map.resize(size_t(n));
-    for (int s = leaves[i]; s != -1;) {
-      if (super[s] > failed.load()) return;
-      // Isolated: a thread waiting for the supernode's own parallel loops takes no other
-      // supernode, which would reuse its workspace.
-      const bool ok =
-          tbb::this_task_arena::isolate([&] { return factorize_supernode(s, A, L, Lx, w); });
-      if (!ok) {
-        for (int f = failed.load();
-             w.failed_column < f && !failed.compare_exchange_weak(f, w.failed_column);) {
+  for (int s = 0; s < nsuper; ++s) waiting[s].store(children_[s], std::memory_order_relaxed);
+  std::atomic<int> failed{n}, factored{0};
+  // Runs the supernodes `starts` and, as each finishes the last child of its parent, the
+  // parent, as long as it is `within` (null: anywhere).
+  const auto run = [&](const std::vector<int>& starts, const std::vector<char>* within) {
+    tbb::parallel_for(size_t(0), starts.size(), [&](size_t i) {
+      Workspace& w = workspaces_.local();
+      w.row_map.resize(size_t(n));
+      w.relative_map.resize(size_t(n));
+      for (int s = starts[i]; s != -1;) {
+        if (super[s] > failed.load()) return;
+        // Isolated: a thread waiting for the supernode's own parallel loops takes no other
+        // supernode, which would reuse its workspace.
+        const bool ok =
+            tbb::this_task_arena::isolate([&] { return factorize_supernode(s, A, L, Lx, w); });
+        factored.fetch_add(1, std::memory_order_relaxed);
+        if (!ok) {
+          for (int f = failed.load();
+               w.failed_column < f && !failed.compare_exchange_weak(f, w.failed_column);) {
+          }
+          return;
         }
-        return;
+        const int p = parent_[s];
+        if (p == -1 || (within && !(*within)[p]) || waiting[p].fetch_sub(1) != 1) return;
+        s = p;
       }
-      const int p = parent_[s];
-      if (p == -1 || waiting[p].fetch_sub(1) != 1) return;
-      s = p;
+    });
+  };
+  // The subtrees of the supernodes where recent factorisations failed run first (a supernode's
+  // parent comes after it, so that one is in those subtrees when its parent is).
+  std::vector<char> probed(static_cast<size_t>(nsuper), 0);
+  std::vector<int> starts;
+  if (!probes_.empty()) {
+    for (const int p : probes_) probed[p] = 1;
+    for (int s = *std::max_element(probes_.begin(), probes_.end()); s >= 0; --s) {
+      if (parent_[s] != -1 && probed[parent_[s]]) probed[s] = 1;
+      if (probed[s] && children_[s] == 0) starts.push_back(s);
     }
-  });
+    run(starts, &probed);
+    starts.clear();
+    if (failed.load() == n)  // the parents of the subtrees' roots have one child less to wait for
+      for (int s = 0; s < nsuper; ++s) {
+        const int p = parent_[s];
+        if (probed[s] && p != -1 && !probed[p] && waiting[p].fetch_sub(1) == 1) starts.push_back(p);
+      }
+  }
+  if (failed.load() == n) {
+    for (int s = 0; s < nsuper; ++s)
+      if (!probed[s] && children_[s] == 0) starts.push_back(s);
+    run(starts, nullptr);
+  }
+  last_factored_ = factored.load();
   L.minor = size_t(failed.load());
-  return failed.load() == n;
+  if (failed.load() == n) return true;
+  // The supernode that failed becomes the first probe of the next factorisation.
+  const int s = super_of_column_[failed.load()];
+  const auto known = std::find(probes_.begin(), probes_.end(), s);
+  if (known != probes_.end()) probes_.erase(known);
+  if (probes_.size() == kProbes) probes_.pop_back();
+  probes_.insert(probes_.begin(), s);
+  return false;
+}
+
+void SupernodalCholesky::keep_probes_of(const SupernodalCholesky& before) {
+  probes_ = before.probes_;
 }
 
 namespace {

@@ -34,7 +34,14 @@ class SupernodalCholesky {
                                                     cholmod_common& common);
 
   /// L = chol(P A P^T) with A's current values. False when A is not positive definite: then
-  /// L->minor is the first column whose pivot is not positive and L is not usable.
+  /// L->minor is the first column whose pivot is not positive and L is not usable. The subtrees
+  /// of the supernodes where the last kProbes failed factorisations failed (the probes) are
+  /// factored first (each a principal submatrix of A: where one is not positive definite,
+  /// neither is A), and the factorisation stops there when they fail; L->minor is then the first
+  /// failing column of those subtrees. A matrix that fails where a recent one failed (the rungs
+  /// of a shift ladder, a failed single-precision factorisation retried in double, the next
+  /// Newton iteration's matrix) costs those subtrees, not every supernode before the failing
+  /// column. The factor and the outcome are bitwise those of one pass in the sequential order.
   bool factorize(const cholmod_sparse& A, cholmod_factor& L);
   /// The same in single precision: the factor's values, in L's layout (L->x's positions), go
   /// to `values` instead of L->x. Half the bytes and about twice the flops per second of the
@@ -43,6 +50,12 @@ class SupernodalCholesky {
   bool factorize(const cholmod_sparse& A, cholmod_factor& L, std::vector<float>& values);
   /// x = A^-1 b (n values each) with the single-precision factor `values` of L, summed in double.
   void solve(const cholmod_factor& L, const std::vector<float>& values, const double* b, double* x);
+  /// The supernodes the last factorisation computed (all of them where it succeeded).
+  int last_factored() const { return last_factored_; }
+  /// Probes first where `before`, of the same L, failed (a fitted pattern keeps L's supernodes).
+  void keep_probes_of(const SupernodalCholesky& before);
+
+  static constexpr size_t kProbes = 8;
 
  private:
   // Maps A into L; `fits` tells whether every entry of A found its place.
@@ -81,6 +94,8 @@ class SupernodalCholesky {
   std::vector<int> parent_;                // in the supernodal elimination tree (-1: a root)
   std::vector<int> children_;              // in that tree
   tbb::enumerable_thread_specific<Workspace> workspaces_;
+  std::vector<int> probes_;  // supernodes where the last failed factorisations failed, latest first
+  int last_factored_ = 0;
   std::vector<double> solve_work_;  // solve(): the permuted vector
   std::vector<double> solve_rows_;  // solve(): one supernode's rows
 };

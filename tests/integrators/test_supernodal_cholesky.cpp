@@ -1,6 +1,7 @@
 // The supernodal factorisation into a CHOLMOD factor: the factor of CHOLMOD's own
-// cholmod_factorize to rounding, the same first failing column on an indefinite matrix, and
-// bitwise the same factor on one, two and three threads.
+// cholmod_factorize to rounding, the same first failing column on an indefinite matrix, the
+// subtree where the last factorisation failed factored first, and bitwise the same factor on
+// one, two and three threads.
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
@@ -140,6 +141,75 @@ TEST(SupernodalCholesky, StopsWhereCholmodStopsOnAnIndefiniteMatrix) {
   cholmod_free_factor(&L, &c);
   cholmod_free_factor(&reference, &c);
   cholmod_free_sparse(&A, &c);
+}
+
+// A copy of A whose diagonal entry at column k of L (permuted) is -1: its first failing pivot.
+cholmod_sparse* failing_at(const cholmod_sparse* A, const cholmod_factor& L, int k,
+                           cholmod_common& c) {
+  cholmod_sparse* out = cholmod_copy_sparse(const_cast<cholmod_sparse*>(A), &c);
+  const int column = static_cast<const int*>(L.Perm)[k];
+  static_cast<double*>(out->x)[static_cast<const int*>(out->p)[column]] = -1;  // stored first
+  return out;
+}
+
+// After a failed factorisation the subtree of the supernode that failed is factored first. A
+// matrix that fails there again costs that subtree only; one that fails elsewhere fails at the
+// first failing column of the sequential loop, as without that history; a positive definite one
+// gets bitwise the factor of a factorisation without it; on one and on two threads.
+TEST(SupernodalCholesky, FactorsFirstWhereTheLastFactorisationFailed) {
+  Common common;
+  cholmod_common& c = common.c;
+  cholmod_sparse* definite = grid_laplacian(20, 0.01, c);
+  cholmod_sparse* indefinite = grid_laplacian(20, -0.6, c);  // fails at a separator
+  cholmod_factor* L = analyse(definite, c);
+  // The last leaf of the supernodal tree (no supernode's first row below its columns is in it):
+  // nearly every other leaf comes before it.
+  const int* super = static_cast<const int*>(L->super);
+  const int* pi = static_cast<const int*>(L->pi);
+  const int* rows = static_cast<const int*>(L->s);
+  std::vector<char> has_child(L->nsuper, 0);
+  for (size_t s = 0; s < L->nsuper; ++s) {
+    const int ncol = super[s + 1] - super[s];
+    if (pi[s + 1] - pi[s] > ncol)
+      has_child[std::upper_bound(super, super + L->nsuper + 1, rows[pi[s] + ncol]) - super - 1] = 1;
+  }
+  int last_leaf = static_cast<int>(L->nsuper) - 1;
+  while (has_child[last_leaf]) --last_leaf;
+  cholmod_sparse* late = failing_at(definite, *L, super[last_leaf], c);
+  cholmod_sparse* early = failing_at(definite, *L, 0, c);
+  const SerialBlas serial;
+  for (const int threads : {1, 2}) {
+    SupernodalCholesky fresh(*definite, *L, c), probing(*definite, *L, c);
+    const auto factor = [&](SupernodalCholesky& s, cholmod_sparse* A) {
+      bool ok = false;
+      on_threads(threads, [&] { ok = s.factorize(*A, *L); });
+      return ok;
+    };
+    ASSERT_TRUE(factor(fresh, definite));
+    const std::vector<double> reference = values(*L);
+    ASSERT_FALSE(factor(fresh, indefinite));
+    const size_t indefinite_minor = L->minor;
+
+    ASSERT_FALSE(factor(probing, late));
+    EXPECT_EQ(L->minor, size_t(super[last_leaf]));
+    const int unprobed = probing.last_factored();
+    EXPECT_FALSE(factor(probing, late));
+    EXPECT_EQ(L->minor, size_t(super[last_leaf]));
+    EXPECT_EQ(probing.last_factored(), 1) << "the failing leaf alone";
+    EXPECT_GT(unprobed, 10) << "the leaves before it";
+
+    EXPECT_FALSE(factor(probing, early));  // the leaf probed passes, supernode 0 fails
+    EXPECT_EQ(L->minor, 0u);
+    EXPECT_FALSE(factor(probing, indefinite));
+    EXPECT_EQ(L->minor, indefinite_minor) << threads << " threads";
+
+    EXPECT_TRUE(factor(probing, definite));
+    EXPECT_EQ(L->minor, L->n);
+    EXPECT_EQ(probing.last_factored(), static_cast<int>(L->nsuper));
+    EXPECT_TRUE(values(*L) == reference) << threads << " threads";
+  }
+  cholmod_free_factor(&L, &c);
+  for (cholmod_sparse* A : {definite, indefinite, late, early}) cholmod_free_sparse(&A, &c);
 }
 
 // Each supernode's updates summed in CHOLMOD's order whichever thread runs it, its dense blocks
