@@ -257,14 +257,15 @@ bool SupernodalCholesky::factorize_into(const cholmod_sparse& A, cholmod_factor&
   std::vector<int> starts;
   if (!probes_.empty()) {
     for (const int p : probes_) probed[p] = 1;
-    for (int s = *std::max_element(probes_.begin(), probes_.end()); s >= 0; --s) {
+    const int highest = *std::ranges::max_element(probes_);  // no probed supernode lies above
+    for (int s = highest; s >= 0; --s) {
       if (parent_[s] != -1 && probed[parent_[s]]) probed[s] = 1;
       if (probed[s] && children_[s] == 0) starts.push_back(s);
     }
     run(starts, &probed);
     starts.clear();
     if (failed.load() == n)  // the parents of the subtrees' roots have one child less to wait for
-      for (int s = 0; s < nsuper; ++s) {
+      for (int s = 0; s <= highest; ++s) {
         const int p = parent_[s];
         if (probed[s] && p != -1 && !probed[p] && waiting[p].fetch_sub(1) == 1) starts.push_back(p);
       }
@@ -279,8 +280,7 @@ bool SupernodalCholesky::factorize_into(const cholmod_sparse& A, cholmod_factor&
   if (failed.load() == n) return true;
   // The supernode that failed becomes the first probe of the next factorisation.
   const int s = super_of_column_[failed.load()];
-  const auto known = std::find(probes_.begin(), probes_.end(), s);
-  if (known != probes_.end()) probes_.erase(known);
+  std::erase(probes_, s);
   if (probes_.size() == kProbes) probes_.pop_back();
   probes_.insert(probes_.begin(), s);
   return false;

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <string>
 #include <string_view>
@@ -19,8 +20,9 @@
 
 namespace {
 
-std::string temp_base() {
-  return "/tmp/depthfem_fuzz_" + std::to_string(getpid());
+std::filesystem::path work_folder() {
+  return std::filesystem::temp_directory_path() /
+         ("depthfem_fuzz_inputs_" + std::to_string(getpid()));
 }
 
 void write(const std::string& path, std::string_view text) {
@@ -37,10 +39,17 @@ void check_located(const std::string& message, const std::string& file) {
 
 }  // namespace
 
+// The inputs are written into a fresh folder, removed at exit.
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  std::filesystem::create_directories(work_folder());
+  std::atexit([] { std::filesystem::remove_all(work_folder()); });
+  return 0;
+}
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size == 0) return 0;
   const std::string_view text(reinterpret_cast<const char*>(data) + 1, size - 1);
-  const std::string base = temp_base();
+  const std::string base = (work_folder() / "input").string();
   std::string file;
   try {
     switch (data[0] % 4) {
