@@ -37,7 +37,7 @@ fi
 case "${1:-}" in
   --test)
     ctest --test-dir build --output-on-failure -j"$jobs"
-    tests/fuzz/run.sh 45
+    tests/fuzz/run.sh 30
     ;;
   --demo) ./apps/demo.sh ;;
   "") ;;
