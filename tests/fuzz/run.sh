@@ -14,8 +14,7 @@ jobs=$(nproc 2>/dev/null || echo 2)
 cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=Sanitize -DCMAKE_CXX_FLAGS_SANITIZE=-O1 \
   -DCMAKE_C_FLAGS_SANITIZE=-O1 -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_C_COMPILER=clang \
   -DDEPTHFEM_SANITIZE=ON -DDEPTHFEM_BUILD_BENCH=OFF > /dev/null
-cmake --build build-sanitize -j"$jobs" --target fuzz_inputs fuzz_results fuzz_command_line \
-  test_core test_inputs depthfem
+cmake --build build-sanitize -j"$jobs" --target sanitizer_pass
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 export LSAN_OPTIONS=suppressions=$PWD/tests/fuzz/lsan.supp  # leaks inside HDF5 on damaged files
 build-sanitize/tests/test_core --gtest_brief=1
