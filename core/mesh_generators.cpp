@@ -9,12 +9,21 @@
 #include <map>
 #include <numbers>
 #include <string>
+#include <utility>
 
 #include "core/error.hpp"
 
 namespace depthfem {
 
 namespace {
+
+// The source of a generated mesh, named after its generator (aggregate initialisation of
+// MeshSource would leave its other members to -Wmissing-field-initializers).
+MeshSource generated(std::string name) {
+  MeshSource source;
+  source.file = std::move(name);
+  return source;
+}
 
 // Splits every cell of an nx x ny x nz grid of nodes into 6 tets. `node(i, j, k)` maps grid
 // coordinates (i may wrap for periodic directions) to a node index.
@@ -97,7 +106,7 @@ TetMesh box_mesh(const BoxParams& p) {
         m.X.row(id(i, j, k)) = (p.lo.array() + s.array() * (p.hi - p.lo).array()).transpose();
       }
   m.tets = kuhn_tets(n(0), n(1), n(2), id);
-  validate_and_orient(m, {"box"});
+  validate_and_orient(m, generated("box"));
   return m;
 }
 
@@ -130,7 +139,7 @@ TetMesh tube_mesh(const TubeParams& p) {
             Vec3(r * std::cos(th), r * std::sin(th), p.length * iz / nz).transpose();
       }
   m.tets = kuhn_tets(nr, nt, nz, id);
-  validate_and_orient(m, {"tube"});
+  validate_and_orient(m, generated("tube"));
   return m;
 }
 
@@ -156,7 +165,7 @@ TetMesh ball_mesh(const BallParams& p) {
                  z * std::sqrt(1 - x2 / 2 - y2 / 2 + x2 * y2 / 3));
     m.X.row(v) = (p.center + p.radius * q).transpose();
   }
-  validate_and_orient(m, {"ball"});
+  validate_and_orient(m, generated("ball"));
   return m;
 }
 
@@ -223,7 +232,7 @@ TetMesh corner_mesh(const CornerParams& p) {
     mesh.tets.middleRows(row, t.rows()) = t;
     row += static_cast<Index>(t.rows());
   }
-  validate_and_orient(mesh, {"corner"});
+  validate_and_orient(mesh, generated("corner"));
   return mesh;
 }
 
