@@ -27,8 +27,16 @@ class AabbTree {
   /// Calls visit(primitive) for every primitive whose box intersects `query`.
   template <class Visit>
   void query(const Box3& query, Visit&& visit) const {
-    walk([&](const Box3& b) { return !b.intersects(query); }, visit,
-         [](const Box3&, const Box3&) { return false; });
+    walk([&](const Box3& b) { return !b.intersects(query); }, visit, query_order);
+  }
+
+  /// Every primitive, in the order query() visits them: each query visits a subsequence of it.
+  std::vector<Index> walk_order() const {
+    std::vector<Index> out;
+    out.reserve(order_.size());
+    walk([](const Box3&) { return false; }, [&](Index primitive) { out.push_back(primitive); },
+         query_order);
+    return out;
   }
 
   /// Calls visit(primitive, lower_bound) for primitives in order of increasing box distance
@@ -53,6 +61,8 @@ class AabbTree {
     Index count = 0;  ///< leaf: number of primitives; inner: 0
   };
   void build(Index node, Index begin, Index end, int leaf_size, std::vector<Vec3>& centers);
+  /// The child order of query() and walk_order(): the same for every node, whatever the boxes.
+  static bool query_order(const Box3&, const Box3&) { return false; }
 
   /// Depth-first walk that skips every node and primitive box `pruned(box)` rejects (it may
   /// tighten as the walk goes), calls visit(primitive) for the rest, and descends into the left

@@ -24,6 +24,36 @@ std::array<Vec3, 3> tri_corners(const Points& x, const TriIndices& tris, Index f
   return {x.row(tris(f, 0)), x.row(tris(f, 1)), x.row(tris(f, 2))};
 }
 
+// Whether tet t and triangle f share a node.
+bool shares_node(const TetIndices& tets, Index t, const TriIndices& tris, Index f) {
+  for (int a = 0; a < 4; ++a)
+    for (int b = 0; b < 3; ++b)
+      if (tets(t, a) == tris(f, b)) return true;
+  return false;
+}
+
+// Fills the compressed rows (start, values) of n rows in parallel over chunks of rows, row(i,
+// out) appending row i's values to out.
+template <class Row>
+void fill_rows(Index n, Row&& row, std::vector<Index>& start, std::vector<Index>& values) {
+  const Index chunks = (n + kChunk - 1) / kChunk;
+  std::vector<std::vector<Index>> parts(static_cast<size_t>(chunks));
+  start.assign(static_cast<size_t>(n) + 1, 0);
+  tbb::parallel_for(Index(0), chunks, [&](Index c) {
+    std::vector<Index>& part = parts[static_cast<size_t>(c)];
+    for (Index i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
+      const size_t before = part.size();
+      row(i, part);
+      start[static_cast<size_t>(i) + 1] = static_cast<Index>(part.size() - before);
+    }
+  });
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  values.clear();
+  values.reserve(static_cast<size_t>(start.back()));
+  for (const std::vector<Index>& part : parts)
+    values.insert(values.end(), part.begin(), part.end());
+}
+
 // True when some fan triangle of the polygon counts (fan_triangle_counts). A polygon without one
 // (a triangle touching a tet along an edge or at a point, as where bodies rest on each other)
 // adds nothing to the energy or its derivatives, so it is not kept as a pair: it would only
@@ -69,40 +99,101 @@ std::vector<Box3> MaterialDepthContact::tree_boxes(const std::vector<Box3>& boxe
 void MaterialDepthContact::build_trees(const Points& x) {
   const std::vector<Box3> boxes = tet_boxes(x, tets_);
   trees_.clear();
-  for (size_t b = 0; b < bodies_.size(); ++b) trees_.emplace_back(tree_boxes(boxes, b));
+  walk_rank_.assign(static_cast<size_t>(tets_.rows()), -1);
+  for (size_t b = 0; b < bodies_.size(); ++b) {
+    const std::vector<Index> order = trees_.emplace_back(tree_boxes(boxes, b)).walk_order();
+    for (size_t k = 0; k < order.size(); ++k)
+      walk_rank_[static_cast<size_t>(tree_tets_[b][static_cast<size_t>(order[k])])] =
+          static_cast<Index>(k);
+  }
 }
 
-void MaterialDepthContact::list_candidates(const Points& x, const std::vector<Box3>& boxes) {
+std::vector<Box3> MaterialDepthContact::refit_to_listed() {
+  const std::vector<Box3> boxes = tet_boxes(listed_x_, tets_);
   for (size_t b = 0; b < bodies_.size(); ++b) trees_[b].refit(tree_boxes(boxes, b));
-  const Index n = static_cast<Index>(tris_.rows());
-  const Index chunks = (n + kChunk - 1) / kChunk;
-  std::vector<std::vector<Index>> tets(static_cast<size_t>(chunks));
-  CandidateList& list = listed_;
-  list.start.assign(static_cast<size_t>(n) + 1, 0);
-  list.tets.clear();
   // Boxes grown by the margin each overlap where the triangle's, grown by twice it, overlaps.
-  const std::vector<Box3> tri_boxes = triangle_boxes(x, tris_, 2 * margin_);
-  tbb::parallel_for(Index(0), chunks, [&](Index c) {
-    for (Index f = c * kChunk; f < std::min(n, (c + 1) * kChunk); ++f) {
-      const Index body = tri_body_(f);
-      for (Index other = 0; other < static_cast<Index>(bodies_.size()); ++other) {
-        if (!searched(body, other)) continue;
-        trees_[other].query(tri_boxes[f], [&](Index local) {
-          const Index t = tree_tets_[static_cast<size_t>(other)][static_cast<size_t>(local)];
-          if (other == body)
-            for (int a = 0; a < 4; ++a)
-              for (int b = 0; b < 3; ++b)
-                if (tets_(t, a) == tris_(f, b)) return;  // shares a node: never in contact
-          tets[c].push_back(t);
-          ++list.start[f + 1];
-        });
-      }
+  return triangle_boxes(listed_x_, tris_, 2 * margin_);
+}
+
+void MaterialDepthContact::search(Index f, const Box3& grown, std::vector<Index>& out) const {
+  const Index body = tri_body_(f);
+  for (Index other = 0; other < static_cast<Index>(bodies_.size()); ++other) {
+    if (!searched(body, other)) continue;
+    trees_[other].query(grown, [&](Index local) {
+      const Index t = tree_tets_[static_cast<size_t>(other)][static_cast<size_t>(local)];
+      if (other != body || !shares_node(tets_, t, tris_, f)) out.push_back(t);
+    });
+  }
+}
+
+bool MaterialDepthContact::pairable(Index f, Index t) const {
+  const Index a = tri_body_(f), b = tet_body_(t);
+  return searched(a, b) && (a != b || !shares_node(tets_, t, tris_, f));
+}
+
+void MaterialDepthContact::list_candidates() {
+  const std::vector<Box3> grown = refit_to_listed();
+  fill_rows(
+      static_cast<Index>(tris_.rows()),
+      [&](Index f, std::vector<Index>& out) { search(f, grown[static_cast<size_t>(f)], out); },
+      listed_.start, listed_.tets);
+  stats_.searched_triangles = static_cast<Index>(tris_.rows());
+}
+
+void MaterialDepthContact::update_candidates(const std::vector<Index>& moved) {
+  std::vector<char> node_moved(static_cast<size_t>(listed_x_.rows()), 0);
+  for (Index i : moved) node_moved[static_cast<size_t>(i)] = 1;
+  const auto touches = [&](const auto& elements, Index e) {
+    for (Eigen::Index k = 0; k < elements.cols(); ++k)
+      if (node_moved[static_cast<size_t>(elements(e, k))]) return true;
+    return false;
+  };
+  const std::vector<Box3> grown = refit_to_listed();
+  // The tree tets with a moved node, and the triangles without one whose grown boxes theirs
+  // now meet: each such triangle's list loses the moved tets and gains those it meets.
+  const AabbTree triangles(grown);
+  std::vector<char> tri_moved(static_cast<size_t>(tris_.rows()));
+  std::vector<char> tet_moved(static_cast<size_t>(tets_.rows()), 0);
+  for (Index f = 0; f < static_cast<Index>(tris_.rows()); ++f)
+    tri_moved[static_cast<size_t>(f)] = touches(tris_, f);
+  std::vector<std::pair<Index, Index>> met;  // (triangle, tet)
+  for (const std::vector<Index>& own : tree_tets_)
+    for (Index t : own) {
+      if (!touches(tets_, t)) continue;
+      tet_moved[static_cast<size_t>(t)] = 1;
+      Box3 box;
+      for (int a = 0; a < 4; ++a) box.extend(Vec3(listed_x_.row(tets_(t, a))));
+      triangles.query(box, [&](Index f) {
+        if (!tri_moved[static_cast<size_t>(f)] && pairable(f, t)) met.emplace_back(f, t);
+      });
     }
-  });
-  std::partial_sum(list.start.begin(), list.start.end(), list.start.begin());
-  for (const std::vector<Index>& chunk : tets)
-    list.tets.insert(list.tets.end(), chunk.begin(), chunk.end());
-  listed_x_ = x;
+  std::ranges::sort(met);
+  // A search of the trees visits a triangle's tets body by body, each tree in its walk order.
+  const auto walked_before = [&](Index a, Index b) {
+    return std::pair(tet_body_(a), walk_rank_[static_cast<size_t>(a)]) <
+           std::pair(tet_body_(b), walk_rank_[static_cast<size_t>(b)]);
+  };
+  const CandidateList old = std::move(listed_);
+  fill_rows(
+      static_cast<Index>(tris_.rows()),
+      [&](Index f, std::vector<Index>& out) {
+        if (tri_moved[static_cast<size_t>(f)]) {
+          search(f, grown[static_cast<size_t>(f)], out);
+          return;
+        }
+        const size_t first = out.size();
+        for (Index k = old.start[static_cast<size_t>(f)]; k < old.start[static_cast<size_t>(f) + 1];
+             ++k)
+          if (!tet_moved[static_cast<size_t>(old.tets[static_cast<size_t>(k)])])
+            out.push_back(old.tets[static_cast<size_t>(k)]);
+        const auto [from, to] =
+            std::ranges::equal_range(met, f, {}, &std::pair<Index, Index>::first);
+        if (from == to) return;
+        for (auto it = from; it != to; ++it) out.push_back(it->second);
+        std::sort(out.begin() + static_cast<std::ptrdiff_t>(first), out.end(), walked_before);
+      },
+      listed_.start, listed_.tets);
+  stats_.searched_triangles = std::ranges::count(tri_moved, 1);
 }
 
 bool MaterialDepthContact::searched(Index a, Index b) const {
@@ -153,14 +244,25 @@ std::vector<ContactPair> MaterialDepthContact::clip(const Points& x, const std::
 }
 
 void MaterialDepthContact::prepare(const Points& x) {
-  const bool relist = listed_x_.rows() == 0 ||
-                      (x - listed_x_).rowwise().squaredNorm().maxCoeff() > margin_ * margin_;
-  const std::vector<Box3> boxes = tet_boxes(x, tets_);
-  if (relist) list_candidates(x, boxes);
   stats_ = ContactStats{};
+  std::vector<Index> moved;  // the nodes farther than the margin from where the list took them
+  if (listed_x_.rows() == x.rows()) {
+    for (Index i = 0; i < x.rows(); ++i)
+      if ((x.row(i) - listed_x_.row(i)).squaredNorm() > margin_ * margin_) moved.push_back(i);
+  }
+  // An update touches the moved nodes' triangles and tets and passes over the whole list once;
+  // past an eighth of the nodes a new list costs about as much (bench/results/knee.md).
+  stats_.relisted = listed_x_.rows() != x.rows() || !moved.empty();
+  if (listed_x_.rows() != x.rows() || static_cast<Index>(moved.size()) > x.rows() / 8) {
+    listed_x_ = x;
+    list_candidates();
+  } else if (!moved.empty()) {
+    for (Index i : moved) listed_x_.row(i) = x.row(i);
+    update_candidates(moved);
+  }
+  const std::vector<Box3> boxes = tet_boxes(x, tets_);
   std::vector<ContactPair> all = clip(x, boxes, listed_, stats_.candidates);
   stats_.listed = static_cast<Index>(listed_.tets.size());
-  stats_.relisted = relist;
   const Index n_pairs = static_cast<Index>(all.size());
   stats_.active = n_pairs;
   // Processing order: along a Morton curve through the polygons' centres, in colored chunks.

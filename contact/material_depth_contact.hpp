@@ -61,7 +61,8 @@ struct ContactStats {
   Index candidates = 0;   ///< triangle-tet pairs whose boxes overlap
   Index active = 0;       ///< pairs with an intersection polygon of non-zero area
   Index listed = 0;       ///< pairs on the candidate list (boxes within twice the list margin)
-  bool relisted = false;  ///< whether this prepare() searched the trees for a new list
+  bool relisted = false;  ///< whether this prepare() brought the list up to date
+  Index searched_triangles = 0;  ///< triangles whose candidates it searched the trees for
 };
 
 /// The contact force module. Geometry (tree, clipping, depth lookup) lives in aabb_tree, clip
@@ -69,10 +70,11 @@ struct ContactStats {
 /// Pair search and integration run in parallel. The trees are searched for a candidate list,
 /// each triangle's tets whose boxes come within twice a margin of its box; prepare() tests only
 /// the listed pairs' boxes and searches the trees again only when some node has moved farther
-/// than the margin since the list was made (or at begin_step): the pairs are those a search
-/// of the trees at every call finds, in the same order. prepare() orders the pairs (PairSchedule)
-/// and finds their 49 Hessian blocks each in the bound pattern; evaluate() adds each pair's
-/// derivatives as it computes them, chunks of a color concurrently, without searching or
+/// than the margin since the list took it (or at begin_step): where a few nodes have, only for
+/// the triangles and tets of those nodes (bench/results/knee.md, tenth round). The pairs are
+/// those a search of the trees at every call finds, in the same order. prepare() orders the pairs
+/// (PairSchedule) and finds their 49 Hessian blocks each in the bound pattern; evaluate() adds each
+/// pair's derivatives as it computes them, chunks of a color concurrently, without searching or
 /// allocating. Every block and gradient entry receives its terms in pair order, whatever the
 /// number of threads.
 class MaterialDepthContact final : public ForceModule {
@@ -109,8 +111,14 @@ class MaterialDepthContact final : public ForceModule {
   /// The active pairs of the last prepare(), in processing order.
   const std::vector<ContactPair>& pairs() const { return pairs_; }
   ContactStats stats() const { return stats_; }
-  /// [m] how far a node may move from where the candidate list was made before it is made anew.
+  /// [m] how far a node may move from where the candidate list took it before it is taken anew.
   double list_margin() const { return margin_; }
+  /// Triangle f's tets on the candidate list, in the order a search of the trees visits them.
+  std::span<const Index> candidates(Index f) const {
+    const auto begin = listed_.tets.begin() + listed_.start[static_cast<size_t>(f)];
+    return {begin, begin + (listed_.start[static_cast<size_t>(f) + 1] -
+                            listed_.start[static_cast<size_t>(f)])};
+  }
 
   /// Energy of one pair (returned), its gradient (21) and, where `hessian` is not null, its
   /// Hessian (21 x 21); variables: tet corners 0..11, triangle corners 12..20.
@@ -128,18 +136,29 @@ class MaterialDepthContact final : public ForceModule {
   VectorX depth_;
   ContactOptions options_;
   double min_area2_ = 0;
-  /// Builds trees_ over the (owned) tets of each body at positions x.
+  /// Builds trees_ over the (owned) tets of each body at positions x, and walk_rank_.
   void build_trees(const Points& x);
-  /// Per triangle (compressed rows), the tets whose boxes grown by the margin overlap the
-  /// triangle's grown by twice it.
+  /// Per triangle (compressed rows), the tets whose boxes at listed_x_ overlap the triangle's
+  /// grown by twice the margin, in the order a search of the trees visits them (walk_rank_).
   struct CandidateList {
     std::vector<Index> start, tets;
   };
   /// The boxes of tree b's tets, in its primitive order.
   std::vector<Box3> tree_boxes(const std::vector<Box3>& boxes, size_t b) const;
-  /// Refits trees_ to the tets' boxes at positions x and lists every triangle's candidate tets
-  /// into listed_.
-  void list_candidates(const Points& x, const std::vector<Box3>& boxes);
+  /// Refits trees_ to the tets' boxes at listed_x_ and returns the triangles' boxes there,
+  /// grown by twice the margin.
+  std::vector<Box3> refit_to_listed();
+  /// Appends triangle f's candidate tets at listed_x_ (`grown`: its grown box) to `out`.
+  void search(Index f, const Box3& grown, std::vector<Index>& out) const;
+  /// Whether a triangle of body a and a tet of body b are a candidate pair: searched bodies, and
+  /// within one body no shared node (neighbours in the mesh are never in contact).
+  bool pairable(Index f, Index t) const;
+  /// Lists every triangle's candidate tets at listed_x_ into listed_.
+  void list_candidates();
+  /// Brings listed_ up to date after the nodes `moved` (a few) were given new places in
+  /// listed_x_: the triangles with such a node are searched again, and the tets with one are
+  /// looked up among the other triangles (a tree over their boxes); the rest of the list stays.
+  void update_candidates(const std::vector<Index>& moved);
   /// The pairs of `list` at x (tets' boxes `boxes`) whose clipped polygon has area, in triangle
   /// order. `candidates`: the pairs clipped.
   std::vector<ContactPair> clip(const Points& x, const std::vector<Box3>& boxes,
@@ -150,9 +169,10 @@ class MaterialDepthContact final : public ForceModule {
   std::vector<Body> bodies_;
   std::vector<AabbTree> trees_;  // per body over its (owned) tets, primitive k: tree_tets_[k]
   std::vector<std::vector<Index>> tree_tets_;  // per body
-  double margin_ = 0;     // [m] a node may move this far before the list is made anew
-  Points listed_x_;       // positions at which the list was made (empty: none yet)
-  CandidateList listed_;  // made at listed_x_
+  std::vector<Index> walk_rank_;  // per tet: its place in its tree's walk order (-1: no tree)
+  double margin_ = 0;             // [m] a node may move this far before the list is made anew
+  Points listed_x_;               // each node's place when the list last took it (empty: no list)
+  CandidateList listed_;          // made at listed_x_
   std::vector<ContactPair> pairs_;
   PairSchedule schedule_;  // of pairs_: tet corners, triangle corners
   ContactStats stats_;

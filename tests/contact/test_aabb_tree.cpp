@@ -48,6 +48,33 @@ TEST(AabbTree, QueriesEqualBruteForceBeforeAndAfterRefit) {
   }
 }
 
+// Every query, before and after a refit, visits its boxes in the order of walk_order(), which
+// holds each primitive once: what lets a list of query results be kept sorted without querying.
+TEST(AabbTree, QueriesVisitInWalkOrder) {
+  std::mt19937 rng(5);
+  std::vector<Box3> boxes = random_boxes(2000, rng);
+  AabbTree tree(boxes);
+  const std::vector<Index> order = tree.walk_order();
+  std::vector<Index> rank(order.size(), -1);
+  for (size_t k = 0; k < order.size(); ++k) rank[static_cast<size_t>(order[k])] = k;
+  EXPECT_EQ(std::ranges::count(rank, -1), 0) << "walk_order() is a permutation";
+  Index visited = 0;
+  for (int pass = 0; pass < 2; ++pass) {
+    for (const Box3& q : random_boxes(200, rng)) {
+      Index last = -1;
+      tree.query(q, [&](Index i) {
+        EXPECT_GT(rank[static_cast<size_t>(i)], last);
+        last = rank[static_cast<size_t>(i)];
+        ++visited;
+      });
+    }
+    for (Box3& b : boxes) b.translate(Vec3(0.3, -0.2, 0.1) * (pass + 1));
+    std::ranges::shuffle(boxes, rng);  // the same tree over other boxes
+    tree.refit(boxes);
+  }
+  EXPECT_GT(visited, 200) << "the queries must meet boxes";
+}
+
 TEST(AabbTree, NearestFindsTheClosestBox) {
   std::mt19937 rng(9);
   const std::vector<Box3> boxes = random_boxes(2000, rng);

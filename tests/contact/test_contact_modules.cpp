@@ -186,15 +186,17 @@ TEST(MaterialDepthContact, ExcludedInterfacesAreNotSearched) {
   EXPECT_EQ(searched, expected);
 }
 
-// The candidate list: after moves within its margin the module keeps its list, after a larger
-// one it searches the trees again, and either way it finds the pairs, polygons and order that a
-// module searching its trees at those positions finds.
+// The candidate list: after moves within its margin the module keeps its list; after a few
+// nodes move beyond it, it searches the trees again for those nodes' triangles and looks up
+// their tets among the other triangles; after many do, it makes a new list. Either way it finds
+// the pairs, polygons and order that a module searching its trees at those positions finds.
 TEST(MaterialDepthContact, TheCandidateListFindsWhatASearchAtThePositionsFinds) {
   const Mesh m = three_boxes();
+  const Index num_tris = static_cast<Index>(m.tris.rows());
   MaterialDepthContact kept(m, material_depth(m), {.penalty = 1e5});
   kept.begin_step(m.X);
   kept.prepare(m.X);
-  ASSERT_TRUE(kept.stats().relisted);
+  ASSERT_EQ(kept.stats().searched_triangles, num_tris);
   const double margin = kept.list_margin();
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1, 1);
@@ -203,18 +205,45 @@ TEST(MaterialDepthContact, TheCandidateListFindsWhatASearchAtThePositionsFinds) 
     for (Index i = 0; i < y.size(); ++i) y.data()[i] += per_axis * u(rng);
     return y;
   };
-  // Each move is measured from where the list was made: within the margin (a node moves at
-  // most sqrt(3) per_axis), then beyond it, then within it again from there.
+  // The nodes of two pairs (tet and triangle) sent two to three margins away, the rest kept.
+  const auto few_far = [&](const Points& from) {
+    Points y = from;
+    for (size_t k = 0; k < 2; ++k) {
+      const ContactPair& p = kept.pairs()[k * kept.pairs().size() / 2];
+      for (int a = 0; a < 4; ++a)
+        y.row(m.tets(p.tet, a)) += Vec3(u(rng), u(rng), 2 + u(rng)).transpose() * margin;
+      for (int b = 0; b < 3; ++b)
+        y.row(m.tris(p.tri, b)) += Vec3(2 + u(rng), u(rng), u(rng)).transpose() * margin;
+    }
+    return y;
+  };
+  // Each move is measured from where the list took each node: within the margin (a node moves
+  // at most sqrt(3) per_axis), then far for all, within again, far for 14 nodes (twice), and
+  // within again from there (0.4 + 0.4 of the margin at most for the nodes listed at `far`).
+  enum Search { kNone, kFew, kAll };
+  const double w = margin / std::sqrt(3.0);
   const Points far = moved(m.X, 3 * margin);
-  const std::vector<std::pair<Points, bool>> moves = {
-      {moved(m.X, 0.5 * margin / std::sqrt(3.0)), false},
-      {moved(m.X, 0.9 * margin / std::sqrt(3.0)), false},
-      {far, true},
-      {moved(far, 0.9 * margin / std::sqrt(3.0)), false}};
-  Index compared = 0;
-  for (const auto& [x, relisted] : moves) {
+  const Points within_far = moved(far, 0.4 * w);
+  const Points few = few_far(within_far);
+  const Points few_again = few_far(few);
+  const std::vector<std::pair<Points, Search>> moves = {{moved(m.X, 0.5 * w), kNone},
+                                                        {moved(m.X, 0.9 * w), kNone},
+                                                        {far, kAll},
+                                                        {within_far, kNone},
+                                                        {few, kFew},
+                                                        {few_again, kFew},
+                                                        {moved(few_again, 0.4 * w), kNone}};
+  Index compared = 0, ordered = 0;
+  for (const auto& [x, search] : moves) {
     kept.prepare(x);
-    EXPECT_EQ(kept.stats().relisted, relisted);
+    const Index searched = kept.stats().searched_triangles;
+    EXPECT_EQ(kept.stats().relisted, search != kNone);
+    if (search == kFew) {
+      EXPECT_GT(searched, 0);
+      EXPECT_LT(searched, num_tris / 4);
+    } else {
+      EXPECT_EQ(searched, search == kAll ? num_tris : 0);
+    }
     MaterialDepthContact fresh(m, material_depth(m), {.penalty = 1e5});
     fresh.prepare(x);
     ASSERT_EQ(kept.pairs().size(), fresh.pairs().size());
@@ -225,8 +254,22 @@ TEST(MaterialDepthContact, TheCandidateListFindsWhatASearchAtThePositionsFinds) 
       for (int v = 0; v < a.polygon.size; ++v) EXPECT_EQ(a.polygon.x[v], b.polygon.x[v]);
     }
     compared += static_cast<Index>(fresh.pairs().size());
+    // The tets both lists hold for a triangle come in the same order (the search's).
+    for (Index f = 0; f < num_tris; ++f) {
+      const auto in = [](std::span<const Index> list, Index t) {
+        return std::ranges::find(list, t) != list.end();
+      };
+      std::vector<Index> a, b;
+      for (Index t : kept.candidates(f))
+        if (in(fresh.candidates(f), t)) a.push_back(t);
+      for (Index t : fresh.candidates(f))
+        if (in(kept.candidates(f), t)) b.push_back(t);
+      EXPECT_EQ(a, b) << "triangle " << f;
+      ordered += a.size() >= 2;
+    }
   }
   EXPECT_GT(compared, 100) << "the boxes must overlap";
+  EXPECT_GT(ordered, 100);
 }
 
 // A distributed run's ranks: each module clips only the pairs of the tets it owns, so two
