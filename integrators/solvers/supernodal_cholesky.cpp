@@ -1,5 +1,6 @@
 #include "integrators/solvers/supernodal_cholesky.hpp"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -71,37 +72,60 @@ SupernodalCholesky::SupernodalCholesky(const cholmod_sparse& A, cholmod_factor& 
   std::vector<int> inverse(n);
   for (int k = 0; k < n; ++k) inverse[perm[k]] = k;
 
-  // Entry (i, j), i >= j, of A is entry (max, min) of the permuted indices in L.
+  // Entry (i, j), i >= j, of A is entry (max, min) of the permuted indices in L, in the
+  // supernode of the smaller. The entries grouped by supernode (a counting sort, in the order of
+  // A within each), then each supernode's placed through a map of its rows, in parallel.
   const int* Ap = static_cast<const int*>(A.p);
   const int* Ai = static_cast<const int*>(A.i);
-  std::vector<int> super_of_entry, source;
-  std::vector<size_t> destination;
-  for (int j = 0; j < n; ++j)
-    for (int p = Ap[j]; p < Ap[j + 1]; ++p) {
-      if (Ai[p] < j) continue;  // the upper triangle is not read (as CHOLMOD)
-      const int a = inverse[Ai[p]], b = inverse[j];
-      const int row = std::max(a, b), col = std::min(a, b);
-      const int s = super_of_column_[col];
-      const int* first = rows + pi[s];
-      const int* last = rows + pi[s + 1];
-      const int* at = std::lower_bound(first, last, row);
-      if (at == last || *at != row) return;
-      super_of_entry.push_back(s);
-      source.push_back(p);
-      destination.push_back(size_t(px[s]) + size_t(col - super[s]) * (last - first) + (at - first));
-    }
-  // Grouped by supernode (a counting sort), in the order of A within each.
+  const auto for_each_entry = [&](auto&& visit) {
+    for (int j = 0; j < n; ++j)
+      for (int p = Ap[j]; p < Ap[j + 1]; ++p)
+        if (Ai[p] >= j) {  // the upper triangle is not read (as CHOLMOD)
+          const int a = inverse[Ai[p]], b = inverse[j];
+          visit(p, std::max(a, b), std::min(a, b));
+        }
+  };
   entry_begin_.assign(nsuper + 1, 0);
-  for (const int s : super_of_entry) ++entry_begin_[s + 1];
+  for_each_entry([&](int, int, int col) { ++entry_begin_[super_of_column_[col] + 1]; });
   for (int s = 0; s < nsuper; ++s) entry_begin_[s + 1] += entry_begin_[s];
-  entry_source_.resize(source.size());
-  entry_destination_.resize(source.size());
+  const size_t entries = entry_begin_[nsuper];
+  entry_source_.resize(entries);
+  entry_destination_.resize(entries);
+  std::vector<int> entry_row(entries), entry_column(entries);
   std::vector<size_t> next = entry_begin_;
-  for (size_t e = 0; e < source.size(); ++e) {
-    const size_t to = next[super_of_entry[e]]++;
-    entry_source_[to] = source[e];
-    entry_destination_[to] = destination[e];
-  }
+  for_each_entry([&](int p, int row, int col) {
+    const size_t to = next[super_of_column_[col]]++;
+    entry_source_[to] = p;
+    entry_row[to] = row;
+    entry_column[to] = col;
+  });
+  struct RowMap {
+    std::vector<int> place, supernode;  // of each row of L: in the supernode it was last set for
+  };
+  tbb::enumerable_thread_specific<RowMap> maps([n] {
+    return RowMap{std::vector<int>(n), std::vector<int>(n, -1)};
+  });
+  std::atomic<bool> all_found{true};
+  tbb::parallel_for(tbb::blocked_range<int>(0, nsuper), [&](const tbb::blocked_range<int>& range) {
+    RowMap& map = maps.local();
+    for (int s = range.begin(); s != range.end() && all_found.load(std::memory_order_relaxed);
+         ++s) {
+      const int nrow = pi[s + 1] - pi[s];
+      for (int k = 0; k < nrow; ++k) {
+        map.place[rows[pi[s] + k]] = k;
+        map.supernode[rows[pi[s] + k]] = s;
+      }
+      for (size_t e = entry_begin_[s]; e < entry_begin_[s + 1]; ++e) {
+        if (map.supernode[entry_row[e]] != s) {
+          all_found.store(false, std::memory_order_relaxed);
+          return;
+        }
+        entry_destination_[e] = size_t(px[s]) + size_t(entry_column[e] - super[s]) * nrow +
+                                size_t(map.place[entry_row[e]]);
+      }
+    }
+  });
+  if (!all_found.load()) return;
   schedule(L);
   fits = true;
 }

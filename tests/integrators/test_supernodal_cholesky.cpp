@@ -111,6 +111,53 @@ TEST(SupernodalCholesky, EqualsCholmodsFactorToRounding) {
   cholmod_free_sparse(&A, &c);
 }
 
+// A pattern with fewer entries than the one L was analysed for (every third off-diagonal entry
+// of the grid Laplacian dropped) fits L, and factors as CHOLMOD factors it with that analysis.
+TEST(SupernodalCholesky, FitsASparserPatternAsCholmodFactorsIt) {
+  Common common;
+  cholmod_common& c = common.c;
+  cholmod_sparse* A = grid_laplacian(14, 0.01, c);
+  cholmod_factor* reference = analyse(A, c);
+  cholmod_factor* L = cholmod_copy_factor(reference, &c);
+  ASSERT_TRUE(reference && L);
+  cholmod_sparse* B = cholmod_copy_sparse(A, &c);
+  int* p = static_cast<int*>(B->p);
+  int* row = static_cast<int*>(B->i);
+  double* x = static_cast<double*>(B->x);
+  int kept = 0, dropped = 0;
+  for (size_t j = 0, k = 0; j < B->ncol; ++j) {
+    const int end = p[j + 1];
+    p[j] = kept;
+    for (; static_cast<int>(k) < end; ++k) {
+      if (row[k] != static_cast<int>(j) && (k % 3) == 0) {
+        ++dropped;
+        continue;
+      }
+      row[kept] = row[k];
+      x[kept++] = x[k];
+    }
+  }
+  p[B->ncol] = kept;
+  ASSERT_GT(dropped, 1000);
+  const std::unique_ptr<SupernodalCholesky> cholesky = SupernodalCholesky::fitted(*B, *L, c);
+  ASSERT_TRUE(cholesky);
+  {
+    const SerialBlas serial;
+    ASSERT_TRUE(cholesky->factorize(*B, *L));
+  }
+  ASSERT_TRUE(cholmod_factorize(B, reference, &c));
+  ASSERT_EQ(reference->minor, reference->n);
+  // As in EqualsCholmodsFactorToRounding: entries below sqrt(6.01), sums of few products.
+  const std::vector<double> ours = values(*L), theirs = values(*reference);
+  double worst = 0;
+  for (size_t k = 0; k < ours.size(); ++k) worst = std::max(worst, std::abs(ours[k] - theirs[k]));
+  EXPECT_LT(worst, 1e-11);
+  cholmod_free_factor(&L, &c);
+  cholmod_free_factor(&reference, &c);
+  cholmod_free_sparse(&B, &c);
+  cholmod_free_sparse(&A, &c);
+}
+
 // Runs f in an arena of `threads` threads, no more allowed.
 template <class F>
 void on_threads(int threads, F&& f) {
