@@ -186,10 +186,10 @@ void MaterialDepthContact::update_candidates(const std::vector<Index>& moved) {
              ++k)
           if (!tet_moved[static_cast<size_t>(old.tets[static_cast<size_t>(k)])])
             out.push_back(old.tets[static_cast<size_t>(k)]);
-        const auto [from, to] =
-            std::ranges::equal_range(met, f, {}, &std::pair<Index, Index>::first);
-        if (from == to) return;
-        for (auto it = from; it != to; ++it) out.push_back(it->second);
+        // met is sorted by triangle, then tet: (f, -1) comes before f's first.
+        auto it = std::lower_bound(met.begin(), met.end(), std::pair<Index, Index>(f, -1));
+        if (it == met.end() || it->first != f) return;
+        for (; it != met.end() && it->first == f; ++it) out.push_back(it->second);
         std::sort(out.begin() + static_cast<std::ptrdiff_t>(first), out.end(), walked_before);
       },
       listed_.start, listed_.tets);

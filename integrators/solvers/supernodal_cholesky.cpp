@@ -64,7 +64,12 @@ SupernodalCholesky::SupernodalCholesky(const cholmod_sparse& A, cholmod_factor& 
       !cholmod_change_factor(CHOLMOD_REAL, true, true, true, true, &L, &common))
     throw std::runtime_error("CHOLMOD: allocating the supernodal factor failed (status " +
                              std::to_string(common.status) + ")");
-  const auto [n, nsuper, super, pi, px, rows, perm] = Layout(L);
+  // Named variables, not a structured binding: the lambdas below capture them (which clang
+  // allows structured bindings only from version 16).
+  const Layout layout(L);
+  const int n = layout.n, nsuper = layout.nsuper;
+  const int *super = layout.super, *pi = layout.pi, *px = layout.px, *rows = layout.rows,
+            *perm = layout.perm;
 
   super_of_column_.resize(n);
   for (int s = 0; s < nsuper; ++s)
