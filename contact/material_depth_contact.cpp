@@ -108,8 +108,7 @@ void MaterialDepthContact::build_trees(const Points& x) {
   }
 }
 
-std::vector<Box3> MaterialDepthContact::refit_to_listed() {
-  const std::vector<Box3> boxes = tet_boxes(listed_x_, tets_);
+std::vector<Box3> MaterialDepthContact::refit_to_listed(const std::vector<Box3>& boxes) {
   for (size_t b = 0; b < bodies_.size(); ++b) trees_[b].refit(tree_boxes(boxes, b));
   // Boxes grown by the margin each overlap where the triangle's, grown by twice it, overlaps.
   return triangle_boxes(listed_x_, tris_, 2 * margin_);
@@ -121,18 +120,21 @@ void MaterialDepthContact::search(Index f, const Box3& grown, std::vector<Index>
     if (!searched(body, other)) continue;
     trees_[other].query(grown, [&](Index local) {
       const Index t = tree_tets_[static_cast<size_t>(other)][static_cast<size_t>(local)];
-      if (other != body || !shares_node(tets_, t, tris_, f)) out.push_back(t);
+      if (!neighbours(f, t)) out.push_back(t);
     });
   }
 }
 
-bool MaterialDepthContact::pairable(Index f, Index t) const {
-  const Index a = tri_body_(f), b = tet_body_(t);
-  return searched(a, b) && (a != b || !shares_node(tets_, t, tris_, f));
+bool MaterialDepthContact::neighbours(Index f, Index t) const {
+  return tri_body_(f) == tet_body_(t) && shares_node(tets_, t, tris_, f);
 }
 
-void MaterialDepthContact::list_candidates() {
-  const std::vector<Box3> grown = refit_to_listed();
+bool MaterialDepthContact::pairable(Index f, Index t) const {
+  return searched(tri_body_(f), tet_body_(t)) && !neighbours(f, t);
+}
+
+void MaterialDepthContact::list_candidates(const std::vector<Box3>& boxes) {
+  const std::vector<Box3> grown = refit_to_listed(boxes);
   fill_rows(
       static_cast<Index>(tris_.rows()),
       [&](Index f, std::vector<Index>& out) { search(f, grown[static_cast<size_t>(f)], out); },
@@ -140,7 +142,8 @@ void MaterialDepthContact::list_candidates() {
   stats_.searched_triangles = static_cast<Index>(tris_.rows());
 }
 
-void MaterialDepthContact::update_candidates(const std::vector<Index>& moved) {
+void MaterialDepthContact::update_candidates(const std::vector<Index>& moved,
+                                             const std::vector<Box3>& boxes) {
   std::vector<char> node_moved(static_cast<size_t>(listed_x_.rows()), 0);
   for (Index i : moved) node_moved[static_cast<size_t>(i)] = 1;
   const auto touches = [&](const auto& elements, Index e) {
@@ -148,7 +151,7 @@ void MaterialDepthContact::update_candidates(const std::vector<Index>& moved) {
       if (node_moved[static_cast<size_t>(elements(e, k))]) return true;
     return false;
   };
-  const std::vector<Box3> grown = refit_to_listed();
+  const std::vector<Box3> grown = refit_to_listed(boxes);
   // The tree tets with a moved node, and the triangles without one whose grown boxes theirs
   // now meet: each such triangle's list loses the moved tets and gains those it meets.
   const AabbTree triangles(grown);
@@ -161,9 +164,7 @@ void MaterialDepthContact::update_candidates(const std::vector<Index>& moved) {
     for (Index t : own) {
       if (!touches(tets_, t)) continue;
       tet_moved[static_cast<size_t>(t)] = 1;
-      Box3 box;
-      for (int a = 0; a < 4; ++a) box.extend(Vec3(listed_x_.row(tets_(t, a))));
-      triangles.query(box, [&](Index f) {
+      triangles.query(boxes[static_cast<size_t>(t)], [&](Index f) {
         if (!tri_moved[static_cast<size_t>(f)] && pairable(f, t)) met.emplace_back(f, t);
       });
     }
@@ -253,14 +254,14 @@ void MaterialDepthContact::prepare(const Points& x) {
   // An update touches the moved nodes' triangles and tets and passes over the whole list once;
   // past an eighth of the nodes a new list costs about as much (bench/results/knee.md).
   stats_.relisted = listed_x_.rows() != x.rows() || !moved.empty();
+  const std::vector<Box3> boxes = tet_boxes(x, tets_);
   if (listed_x_.rows() != x.rows() || static_cast<Index>(moved.size()) > x.rows() / 8) {
     listed_x_ = x;
-    list_candidates();
+    list_candidates(boxes);
   } else if (!moved.empty()) {
     for (Index i : moved) listed_x_.row(i) = x.row(i);
-    update_candidates(moved);
+    update_candidates(moved, tet_boxes(listed_x_, tets_));
   }
-  const std::vector<Box3> boxes = tet_boxes(x, tets_);
   std::vector<ContactPair> all = clip(x, boxes, listed_, stats_.candidates);
   stats_.listed = static_cast<Index>(listed_.tets.size());
   const Index n_pairs = static_cast<Index>(all.size());

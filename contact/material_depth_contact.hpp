@@ -145,20 +145,23 @@ class MaterialDepthContact final : public ForceModule {
   };
   /// The boxes of tree b's tets, in its primitive order.
   std::vector<Box3> tree_boxes(const std::vector<Box3>& boxes, size_t b) const;
-  /// Refits trees_ to the tets' boxes at listed_x_ and returns the triangles' boxes there,
-  /// grown by twice the margin.
-  std::vector<Box3> refit_to_listed();
+  /// Refits trees_ to the tets' boxes at listed_x_ (`boxes`, of all tets) and returns the
+  /// triangles' boxes there, grown by twice the margin.
+  std::vector<Box3> refit_to_listed(const std::vector<Box3>& boxes);
   /// Appends triangle f's candidate tets at listed_x_ (`grown`: its grown box) to `out`.
   void search(Index f, const Box3& grown, std::vector<Index>& out) const;
-  /// Whether a triangle of body a and a tet of body b are a candidate pair: searched bodies, and
-  /// within one body no shared node (neighbours in the mesh are never in contact).
+  /// Whether triangle f and tet t are neighbours in the mesh (one body, a shared node): never
+  /// in contact.
+  bool neighbours(Index f, Index t) const;
+  /// Whether triangle f and tet t are a candidate pair: of searched bodies, not neighbours.
   bool pairable(Index f, Index t) const;
-  /// Lists every triangle's candidate tets at listed_x_ into listed_.
-  void list_candidates();
+  /// Lists every triangle's candidate tets at listed_x_ (`boxes`: the tets' there) into listed_.
+  void list_candidates(const std::vector<Box3>& boxes);
   /// Brings listed_ up to date after the nodes `moved` (a few) were given new places in
   /// listed_x_: the triangles with such a node are searched again, and the tets with one are
   /// looked up among the other triangles (a tree over their boxes); the rest of the list stays.
-  void update_candidates(const std::vector<Index>& moved);
+  /// `boxes`: the tets' boxes at listed_x_.
+  void update_candidates(const std::vector<Index>& moved, const std::vector<Box3>& boxes);
   /// The pairs of `list` at x (tets' boxes `boxes`) whose clipped polygon has area, in triangle
   /// order. `candidates`: the pairs clipped.
   std::vector<ContactPair> clip(const Points& x, const std::vector<Box3>& boxes,
