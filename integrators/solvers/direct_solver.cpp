@@ -149,8 +149,8 @@ struct DirectSolver::Impl {
                                std::to_string(c.status) + ")");
   }
 
-  // Fills `pattern` and `diagonal` for M and returns its lower triangle with that pattern.
-  cholmod_sparse* lower_triangle(const BlockSparseMatrix& M);
+  // Fills `diagonal` for `pattern` and returns a lower triangle with that pattern.
+  cholmod_sparse* lower_triangle();
   // Keeps the ordering and symbolic factor when the pattern of `next` (M's lower triangle) fits
   // in the factor's (a contact coupling already present as fill): only where its entries land
   // in L is found anew, and A becomes `next`. False (next untouched) otherwise.
@@ -198,8 +198,7 @@ cholmod_factor* DirectSolver::Impl::analyse_with(int supernodal) {
   return L;
 }
 
-cholmod_sparse* DirectSolver::Impl::lower_triangle(const BlockSparseMatrix& M) {
-  pattern = M.scalar_pattern(Triangle::kUpper, decoupled);
+cholmod_sparse* DirectSolver::Impl::lower_triangle() {
   const size_t n = pattern.row_begin.size() - 1, nnz = pattern.col.size();
   cholmod_sparse* out = cholmod_allocate_sparse(n, n, nnz, 1, 1, -1, CHOLMOD_REAL, &c);
   check("allocate");
@@ -235,14 +234,25 @@ bool DirectSolver::Impl::reanalyse() {
     cholmod_free_factor(&llt, &c);
     return false;
   }
-  analysis = {analysis.ordering, c.fl, c.lnz, analysis.refitted, analysis.reanalysed + 1};
+  analysis = {analysis.ordering,      c.fl, c.lnz, analysis.unchanged, analysis.refitted,
+              analysis.reanalysed + 1};
   return true;
 }
 
-// The lower triangle of M is built once, for whichever of refit, reanalyse and a new ordering
-// takes it.
+// A pattern that differs from the analysed one only in couplings of decoupled nodes (a contact
+// pair of a prescribed node and a free one) leaves the factor's as it is: nothing is redone but
+// the kept factor's end, as after any new pattern. Otherwise the lower triangle of M is built
+// once, for whichever of refit, reanalyse and a new ordering takes it.
 void DirectSolver::Impl::analyse(const BlockSparseMatrix& M) {
-  cholmod_sparse* next = lower_triangle(M);
+  ScalarPattern next_pattern = M.scalar_pattern(Triangle::kUpper, decoupled);
+  if (A && llt && next_pattern.row_begin == pattern.row_begin && next_pattern.col == pattern.col) {
+    kept.drop();
+    version = M.pattern_version();
+    ++analysis.unchanged;
+    return;
+  }
+  pattern = std::move(next_pattern);
+  cholmod_sparse* next = lower_triangle();
   if (refit(M, next)) return;
   const bool ordered = llt && next->nrow == llt->n;  // perm orders a matrix of this size
   release_pattern();
@@ -257,7 +267,7 @@ void DirectSolver::Impl::order(const BlockSparseMatrix& M) {
   const auto try_ordering = [&](DirectOrdering o) {
     perm = node_ordering(G.get(), o);
     llt = analyse_with(CHOLMOD_SUPERNODAL);
-    analysis = {o, c.fl, c.lnz, 0, 0};
+    analysis = {o, c.fl, c.lnz, 0, 0, 0};
   };
   const DirectOrdering first =
       options.ordering == DirectOrdering::kMetis ? DirectOrdering::kMetis : DirectOrdering::kAmd;

@@ -47,6 +47,9 @@ struct DirectAnalysis {
   DirectOrdering ordering = DirectOrdering::kAmd;  ///< the ordering used (kAmd or kMetis)
   double flops = 0;                                ///< of one LL^T factorisation
   double factor_entries = 0;                       ///< nonzeros of L
+  /// Patterns since this ordering was computed whose scalar pattern is the analysed one (they
+  /// differ from it in couplings of decoupled nodes only): nothing was redone.
+  int unchanged = 0;
   /// Patterns since this ordering was computed that fit in its factor (kept it).
   int refitted = 0;
   /// Patterns since this ordering was computed that did not fit in its factor and were

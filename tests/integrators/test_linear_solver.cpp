@@ -307,9 +307,10 @@ BlockSparseMatrix with_couplings(const BlockSparseMatrix& A,
   return B;
 }
 
-// A new pattern whose entries lie in the factor of the one analysed before keeps that analysis
-// (a coupling of a decoupled node, zero in the matrix, adds no entry); one that adds an entry
-// outside the factor is analysed anew. Either way the solve is exact.
+// A new pattern that adds only a coupling of a decoupled node (zero in the matrix) leaves the
+// factor's pattern as it is: nothing is redone; one that adds an entry outside the factor is
+// analysed anew; one whose entries lie in that factor (the first pattern again, a part of the
+// larger one) keeps its analysis and is fitted to it. Each solve is exact.
 TEST(LinearSolver, DirectKeepsItsAnalysisForAPatternThatFitsTheFactor) {
   const Problem p = clamped_block(0.0);
   const std::vector<char> clamped = clamped_nodes(p.A);
@@ -321,17 +322,23 @@ TEST(LinearSolver, DirectKeepsItsAnalysisForAPatternThatFitsTheFactor) {
   VectorX x;
   ASSERT_TRUE(solver.solve(p.A, p.b, x).success);
   EXPECT_EQ(solver.analyse(p.A).refitted, 0);
-  const BlockSparseMatrix fits = with_couplings(p.A, {{clamped_node, last}}, 0.0);
-  ASSERT_TRUE(solver.solve(fits, p.b, x).success);
-  EXPECT_EQ(solver.analyse(fits).refitted, 1) << "a decoupled node's coupling adds no entry";
-  EXPECT_LE(residual(fits, x, p.b), 1e-12);
+  EXPECT_EQ(solver.analyse(p.A).unchanged, 0);
+  const BlockSparseMatrix same = with_couplings(p.A, {{clamped_node, last}}, 0.0);
+  ASSERT_TRUE(solver.solve(same, p.b, x).success);
+  EXPECT_EQ(solver.analyse(same).unchanged, 1) << "a decoupled node's coupling adds no entry";
+  EXPECT_EQ(solver.analyse(same).refitted, 0);
+  EXPECT_LE(residual(same, x, p.b), 1e-12);
   // Free nodes at the two ends of the block are not coupled in the factor of an AMD ordering
   // of a 6 x 3 x 3 block (its fill stays within a few layers).
   const Index first_free = Index(std::find(clamped.begin(), clamped.end(), 0) - clamped.begin());
   const BlockSparseMatrix grows = with_couplings(p.A, {{first_free, last}}, 1e-3);
   ASSERT_TRUE(solver.solve(grows, p.b, x).success);
   EXPECT_EQ(solver.analyse(grows).refitted, 0) << "an entry outside the factor needs an analysis";
+  EXPECT_EQ(solver.analyse(grows).unchanged, 0);
   EXPECT_LE(residual(grows, x, p.b), 1e-12);
+  ASSERT_TRUE(solver.solve(p.A, p.b, x).success);
+  EXPECT_EQ(solver.analyse(p.A).refitted, 1) << "a part of the analysed pattern fits its factor";
+  EXPECT_LE(residual(p.A, x, p.b), 1e-12);
 }
 
 // A pattern that does not fit the factor but whose factorisation under the same ordering costs
