@@ -1,6 +1,7 @@
 #include "core/block_sparse_matrix.hpp"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -42,8 +43,9 @@ SparsityBuilder::Rows rows_of(const std::vector<Index>& count, Fill fill) {
 
 }  // namespace
 
-// The pairs bucketed by row (a counting sort, linear in their number), then each row's few
-// columns sorted and deduplicated in place, rows in parallel.
+// The pairs bucketed by row (a counting sort, linear in their number), then each row's columns
+// deduplicated in place (a mark per column and thread: the cliques of contact pairs repeat a
+// column many times in a row) and sorted, rows in parallel.
 SparsityBuilder::Rows SparsityBuilder::rows() const {
   const size_t n = static_cast<size_t>(num_nodes_);
   std::vector<size_t> bucket(n + 1, 1);  // every row holds its diagonal
@@ -55,12 +57,21 @@ SparsityBuilder::Rows SparsityBuilder::rows() const {
   for (size_t i = 0; i < n; ++i) all[next[i]++] = static_cast<Index>(i);
   for (const auto& [a, b] : pairs_) all[next[static_cast<size_t>(a)]++] = b;
   std::vector<Index> count(n);
+  tbb::enumerable_thread_specific<std::vector<Index>> marks(n, Index(-1));  // row last seen
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const auto& r) {
+    std::vector<Index>& mark = marks.local();
     for (size_t i = r.begin(); i < r.end(); ++i) {
       const auto first = all.begin() + static_cast<std::ptrdiff_t>(bucket[i]),
                  last = all.begin() + static_cast<std::ptrdiff_t>(bucket[i + 1]);
-      std::sort(first, last);
-      count[i] = static_cast<Index>(std::unique(first, last) - first);
+      auto unique_end = first;
+      for (auto p = first; p != last; ++p) {
+        Index& seen = mark[static_cast<size_t>(*p)];
+        if (seen == static_cast<Index>(i)) continue;
+        seen = static_cast<Index>(i);
+        *unique_end++ = *p;
+      }
+      std::sort(first, unique_end);
+      count[i] = static_cast<Index>(unique_end - first);
     }
   });
   return rows_of(count, [&](size_t i, Index* to) {

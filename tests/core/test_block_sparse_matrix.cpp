@@ -103,6 +103,38 @@ TEST(BlockSparseMatrix, EveryNewPatternGetsANewVersion) {
 
 // The union of two patterns is the pattern of both sets of couplings; block_map sends every
 // block of a pattern to the same (row, column) of another, -1 where the other lacks it.
+// Rows hold every coupled column once, sorted, the diagonal included, however often cliques
+// repeat a coupling (contact pairs repeat their nodes' couplings many times): against a set of
+// the pairs, over rows enough for both threads' chunks.
+TEST(SparsityBuilder, RowsHoldEachCouplingOnceInOrder) {
+  const Index n = 3000;
+  SparsityBuilder builder(n);
+  std::set<std::pair<Index, Index>> reference;
+  for (Index i = 0; i < n; ++i) reference.emplace(i, i);
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<Index> node(0, n - 1), near(0, 20);
+  for (int k = 0; k < 20000; ++k) {
+    const Index base = node(rng);  // nodes close to each other: many repeated couplings
+    std::vector<Index> clique;
+    for (int a = 0; a < 7; ++a) clique.push_back(std::min(n - 1, base + near(rng)));
+    builder.add_clique(clique);
+    for (Index a : clique)
+      for (Index b : clique) reference.emplace(a, b);
+  }
+  const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 2);
+  const SparsityBuilder::Rows rows = builder.rows();
+  ASSERT_EQ(rows.row_begin.size(), static_cast<size_t>(n) + 1);
+  std::set<std::pair<Index, Index>> found;
+  for (Index i = 0; i < n; ++i) {
+    for (Index k = rows.row_begin[i]; k < rows.row_begin[i + 1]; ++k) {
+      if (k > rows.row_begin[i]) EXPECT_LT(rows.col[k - 1], rows.col[k]) << "row " << i;
+      found.emplace(i, rows.col[k]);
+    }
+  }
+  EXPECT_EQ(found, reference);
+  EXPECT_EQ(rows.col.size(), reference.size()) << "each coupling once";
+}
+
 TEST(BlockSparseMatrix, MergedPatternsAndBlockMapsKeepRowsAndColumns) {
   const TetMesh m = box_mesh({Vec3::Zero(), Vec3::Ones(), Eigen::Vector3i(3, 2, 2)});
   const Index n = static_cast<Index>(m.X.rows());
