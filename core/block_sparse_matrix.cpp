@@ -8,6 +8,7 @@
 #include <atomic>
 #include <iterator>
 #include <limits>
+#include <numeric>
 #include <stdexcept>
 
 namespace depthfem {
@@ -152,15 +153,26 @@ std::vector<Index> BlockSparseMatrix::clique_block_indices(
   const Index rows = static_cast<Index>(cliques.rows()), K = static_cast<Index>(cliques.cols());
   std::vector<Index> off(static_cast<size_t>(rows) * K * K);
   std::atomic<bool> missing{false};
+  // Each row of a clique's nodes walked once against the clique's nodes in ascending order: a
+  // merge, where a binary search per pair branches unpredictably.
   tbb::parallel_for(
       tbb::blocked_range<Index>(0, rows, 4096), [&](const tbb::blocked_range<Index>& r) {
-        for (Index e = r.begin(); e < r.end() && !missing.load(std::memory_order_relaxed); ++e)
-          for (Index a = 0; a < K; ++a)
-            for (Index b = 0; b < K; ++b) {
-              const Index k = block_index(cliques(e, a), cliques(e, b));
-              if (k < 0) missing = true;
-              off[(static_cast<size_t>(e) * K + a) * K + b] = k;
+        std::vector<Index> by_node(static_cast<size_t>(K));  // clique positions by node
+        for (Index e = r.begin(); e < r.end() && !missing.load(std::memory_order_relaxed); ++e) {
+          std::iota(by_node.begin(), by_node.end(), Index(0));
+          std::ranges::sort(by_node, {}, [&](Index b) { return cliques(e, b); });
+          for (Index a = 0; a < K; ++a) {
+            const Index i = cliques(e, a), end = row_begin_[i + 1];
+            Index k = row_begin_[i];
+            for (Index b : by_node) {
+              const Index j = cliques(e, b);
+              while (k < end && col_[k] < j) ++k;
+              const bool found = k < end && col_[k] == j;
+              if (!found) missing = true;
+              off[(static_cast<size_t>(e) * K + a) * K + b] = found ? k : -1;
             }
+          }
+        }
       });
   if (missing) off.clear();
   return off;

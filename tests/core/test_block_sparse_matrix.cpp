@@ -183,6 +183,17 @@ TEST(BlockSparseMatrix, CliqueBlockIndicesMatchLookUpsAndAddDenseMatrices) {
   }
   EXPECT_EQ((Eigen::MatrixXd(A.to_sparse()) - Eigen::MatrixXd(B.to_sparse())).cwiseAbs().maxCoeff(),
             0.0);
+  // Seven-node cliques (as contact pairs') in any order, nodes repeated: one look-up per pair.
+  Eigen::Matrix<Index, Eigen::Dynamic, 7> sevens(m.tets.rows(), 7);
+  std::uniform_int_distribution<int> corner(0, 3);
+  for (Index t = 0; t < m.tets.rows(); ++t)
+    for (int a = 0; a < 7; ++a) sevens(t, a) = m.tets(t, a < 4 ? 3 - a : corner(rng));
+  const std::vector<Index> off7 = A.clique_block_indices(sevens);
+  ASSERT_EQ(off7.size(), 49 * static_cast<size_t>(m.tets.rows()));
+  for (Index t = 0; t < m.tets.rows(); ++t)
+    for (int a = 0; a < 7; ++a)
+      for (int b = 0; b < 7; ++b)
+        EXPECT_EQ(off7[49 * t + 7 * a + b], A.block_index(sevens(t, a), sevens(t, b)));
   // A clique of uncoupled nodes has no block indices at all.
   Eigen::Matrix<Index, 1, 2> far;
   far << 0, n - 1;
