@@ -39,11 +39,6 @@ class ForceModule {
   /// Once per iterate before evaluation (refit a tree, find contact pairs). Default: nothing.
   virtual void prepare(const Points& /*x*/) {}
 
-  /// True where x is illegal for this module (its energy +infinity) as far as it can tell
-  /// cheaply and without prepare(x): an inverted element. False promises nothing (evaluate
-  /// decides). Default: false.
-  virtual bool illegal(const Points& /*x*/) const { return false; }
-
   /// True when the couplings changed since the last bind() (new contact pairs): the owner
   /// rebuilds the Hessian pattern before the next assembly.
   virtual bool pattern_changed() const { return false; }

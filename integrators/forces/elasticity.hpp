@@ -100,8 +100,6 @@ class Elasticity final : public ForceModule {
 
   /// Global id of the first tet (in group order) with det F <= 0 at x, or -1 if none.
   Index first_inverted(const Points& x) const;
-  /// Whether some tet is inverted at x (first_inverted).
-  bool illegal(const Points& x) const override { return first_inverted(x) >= 0; }
 
  private:
   struct Group {

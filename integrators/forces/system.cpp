@@ -38,16 +38,6 @@ double System::max_step(const Points& x, const Points& dx) const {
   return ranks_ ? ranks_->min(alpha) : alpha;
 }
 
-bool System::illegal(const Points& x) const {
-  bool found = false;
-  for (size_t m = 0; m < modules_.size() && !found; ++m) {
-    if (!evaluates(m)) continue;
-    PhaseTimers::Scope t(timers_, "collision detection: " + modules_[m]->name());
-    found = modules_[m]->illegal(x);
-  }
-  return ranks_ ? ranks_->sum(found ? 1.0 : 0.0) > 0 : found;
-}
-
 double System::module_energy(const ForceModule& module, const Points& x) const {
   const auto found =
       std::ranges::find_if(modules_, [&](const auto& m) { return m.get() == &module; });

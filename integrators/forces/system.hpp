@@ -53,9 +53,6 @@ class System {
   void set_load(double load);
   /// Calls every module's prepare(x); a module whose couplings changed invalidates the pattern.
   void prepare(const Points& x);
-  /// Whether some module finds x illegal without preparing it (ForceModule::illegal; in a
-  /// distributed System on any rank): its energy is +infinity, and nothing needs preparing.
-  bool illegal(const Points& x) const;
   /// Total energy; +infinity when some module finds x illegal.
   double energy(const Points& x);
   /// The energy of `module` (one of this System's) at x; in a distributed System its parts

@@ -18,14 +18,8 @@ void StaticSolver::run(Points& x, double start_load) {
 bool StaticSolver::legal_start(const Points& x, double target, Points& trial) {
   const Constraints& constraints = lifecycle_.constraints();
   System& system = lifecycle_.system();
-  // A trial with an inverted tet is rejected before the modules prepare it: the contact search
-  // there (a new candidate list, the pairs clipped) would be thrown away, and made again at x.
-  const auto legal = [&system](const Points& y) {
-    if (system.illegal(y)) return false;
-    system.prepare(y);
-    return std::isfinite(system.energy(y));
-  };
-  if (legal(trial)) return true;
+  system.prepare(trial);
+  if (std::isfinite(system.energy(trial))) return true;
   // An illegal trial (the predictor, or the prescribed motion alone, inverts a tet): carry the
   // prescribed motion into the body by the stiffness at x (linearised_start), else try the
   // motion alone, else give up on the increment (it is halved).
@@ -34,10 +28,12 @@ bool StaticSolver::legal_start(const Points& x, double target, Points& trial) {
   if (options_.linearised_start) {
     trial = newton_.linearised_step(x, moved - x);
     constraints.impose(target, trial);
-    if (legal(trial)) return true;
+    system.prepare(trial);
+    if (std::isfinite(system.energy(trial))) return true;
   }
   trial = moved;
-  if (legal(trial)) return true;
+  system.prepare(trial);
+  if (std::isfinite(system.energy(trial))) return true;
   last_failure_ = "prescribed motion inverts an element";
   return false;
 }

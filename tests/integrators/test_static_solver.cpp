@@ -1,8 +1,7 @@
 // StaticSolver on small spring problems with closed-form equilibria: a hardening two-element bar
 // under an end load, adaptive loading (halved after a failed increment, grown after two
-// successes in a row), the two-point predictor, prescribed motion exact at every step, no module
-// prepared where an element is inverted, and the end of a run whose increment no longer changes
-// the load.
+// successes in a row), the two-point predictor, prescribed motion exact at every step, and the
+// end of a run whose increment no longer changes the load.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -12,9 +11,6 @@
 #include <string>
 
 #include "core/error.hpp"
-#include "core/mesh_generators.hpp"
-#include "integrators/assembled.hpp"
-#include "integrators/forces/elasticity.hpp"
 #include "integrators/forces/gravity.hpp"
 #include "integrators/pair_springs.hpp"
 #include "integrators/solvers/static_solver.hpp"
@@ -23,7 +19,6 @@ namespace depthfem {
 namespace {
 
 using testing::PairSprings;
-using testing::whole_mesh;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kEps = std::numeric_limits<double>::epsilon();
@@ -300,51 +295,6 @@ TEST(StaticSolver, PrescribedMotionIsExactAtEveryStep) {
               options.newton.tolerance / (k_a + k_b + k_g) + 4 * kEps)
         << "load " << lambda;
   }
-}
-
-// Records at every prepare whether the elements were inverted there.
-class PrepareSpy final : public ForceModule {
- public:
-  explicit PrepareSpy(const Elasticity& elasticity) : elasticity_(elasticity) {}
-  std::string name() const override { return "spy"; }
-  void prepare(const Points& x) override {
-    ++prepared;
-    if (elasticity_.first_inverted(x) >= 0) ++prepared_inverted;
-  }
-  void add_couplings(SparsityBuilder&) const override {}
-  double evaluate(const Points&, VectorX*, BlockSparseMatrix*) const override { return 0; }
-  int prepared = 0, prepared_inverted = 0;
-
- private:
-  const Elasticity& elasticity_;
-};
-
-TEST(StaticSolver, NoModuleIsPreparedWhereAnElementIsInverted) {
-  // A bar of four cells, clamped at x = 0, its end face pushed 1.5 cells back in one increment:
-  // the end face alone moved inverts the last cell's tets, so the linearised start carries the
-  // motion into the bar; the modules (contact's search) are never prepared at the first trial.
-  const TetMesh m = box_mesh({Vec3::Zero(), Vec3(4, 1, 1), Eigen::Vector3i(4, 1, 1)});
-  std::vector<Index> clamped, pushed;
-  for (Index i = 0; i < m.X.rows(); ++i) {
-    if (m.X(i, 0) == 0) clamped.push_back(i);
-    if (m.X(i, 0) == 4) pushed.push_back(i);
-  }
-  Rig rig(m.X, {{"clamp", clamped, Displaced{Vec3::Zero()}},
-                {"push", pushed, Displaced{Vec3(-1.5, 0, 0)}}});
-  const Elasticity& elasticity = rig.system.add(std::make_unique<Elasticity>(
-      m.X, m.tets, std::vector<ElasticGroup>{whole_mesh(m, NeoHookean{1e3, 1e4}, Vec3::UnitX())}));
-  const PrepareSpy& spy = rig.system.add(std::make_unique<PrepareSpy>(elasticity));
-  Points moved = m.X;
-  rig.constraints.impose(1.0, moved);
-  ASSERT_GE(elasticity.first_inverted(moved), 0) << "the test needs an illegal first trial";
-  StaticOptions options;
-  options.initial_increment = options.max_increment = 1.0;
-  Points x = m.X;
-  StaticSolver(rig.lifecycle, nullptr, options).run(x);
-  ASSERT_EQ(rig.steps.size(), 1u) << "one increment, from the linearised start";
-  EXPECT_EQ(elasticity.first_inverted(x), -1);
-  EXPECT_GT(spy.prepared, 0);
-  EXPECT_EQ(spy.prepared_inverted, 0);
 }
 
 TEST(StaticSolver, AnIncrementThatNoLongerChangesTheLoadEndsTheRun) {
