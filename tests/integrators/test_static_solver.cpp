@@ -26,24 +26,11 @@ constexpr double kEps = std::numeric_limits<double>::epsilon();
 // A bar along x of elements (i, j) with rest length L: per element E = k/2 s^2 + q/4 s^4 with
 // the stretch s = (x_j - x_i)_x - L, so the tension is f(s) = k s + q s^3 and the tangent
 // stiffness k + 3 q s^2. Only x components enter (the nodes are held on the axis).
-class HardeningBar final : public ForceModule {
+class HardeningBar final : public testing::TwoNodeElements {
  public:
-  struct Element {
-    Index i, j;
-    double k;
-  };
   HardeningBar(std::vector<Element> elements, double q, double L)
-      : elements_(std::move(elements)), q_(q), L_(L) {}
+      : TwoNodeElements(std::move(elements)), q_(q), L_(L) {}
   std::string name() const override { return "hardening bar"; }
-  void add_couplings(SparsityBuilder& builder) const override {
-    for (const Element& e : elements_) builder.add_clique(std::vector<Index>{e.i, e.j});
-  }
-  void bind(const BlockSparseMatrix& H) override {
-    blocks_.clear();
-    for (const Element& e : elements_)
-      blocks_.push_back({H.block_index(e.i, e.i), H.block_index(e.i, e.j), H.block_index(e.j, e.i),
-                         H.block_index(e.j, e.j)});
-  }
   double evaluate(const Points& x, VectorX* g, BlockSparseMatrix* H) const override {
     double E = 0;
     for (size_t n = 0; n < elements_.size(); ++n) {
@@ -55,20 +42,13 @@ class HardeningBar final : public ForceModule {
         (*g)(3 * e.j) += f;
         (*g)(3 * e.i) -= f;
       }
-      if (H) {
-        H->block(blocks_[n][0])(0, 0) += c;
-        H->block(blocks_[n][1])(0, 0) -= c;
-        H->block(blocks_[n][2])(0, 0) -= c;
-        H->block(blocks_[n][3])(0, 0) += c;
-      }
+      if (H) add_pair(*H, n, Mat3{{c, 0, 0}, {0, 0, 0}, {0, 0, 0}});
     }
     return E;
   }
 
  private:
-  std::vector<Element> elements_;
   double q_, L_;
-  std::vector<std::array<Index, 4>> blocks_;
 };
 
 // No energy, but illegal (+infinity) where node `node` is at x > `limit` (absolute), or has
