@@ -79,7 +79,9 @@ struct Stages {
     v.weight = {1 - t, t};
     v.u_t = L::kT + crossings++;
     v.dy_dt << x[B] - x[A], gamma[B] - gamma[A];
-    v.y << R, G;
+    // Entry by entry: `v.y << R, G` from a temporary R drew GCC 12's -Warray-bounds (a 4-wide
+    // load from its 24 bytes).
+    v.y = Vec4(R(0), R(1), R(2), G);
   }
   // Makes polygon vertex k corner A itself.
   void set_corner(int k, int A) {
