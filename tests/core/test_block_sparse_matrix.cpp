@@ -127,7 +127,9 @@ TEST(SparsityBuilder, RowsHoldEachCouplingOnceInOrder) {
   std::set<std::pair<Index, Index>> found;
   for (Index i = 0; i < n; ++i) {
     for (Index k = rows.row_begin[i]; k < rows.row_begin[i + 1]; ++k) {
-      if (k > rows.row_begin[i]) EXPECT_LT(rows.col[k - 1], rows.col[k]) << "row " << i;
+      if (k > rows.row_begin[i]) {
+        EXPECT_LT(rows.col[k - 1], rows.col[k]) << "row " << i;
+      }
       found.emplace(i, rows.col[k]);
     }
   }
