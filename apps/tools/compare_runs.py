@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """Compares the positions of two results files of one scene at the load factors or times both
-completed (a distributed run against the serial one, say); both must end at the same one.
+completed (a distributed run against the serial one, say); both must end at the same one. Steps
+at the same load (the settle steps after the full load) are paired in order.
 
     compare_runs.py A.h5 B.h5 [--tolerance T]
 
@@ -27,10 +28,17 @@ def compare(path_a, path_b):
         if not loads_a or not loads_b or loads_a[-1] != loads_b[-1]:
             raise ResultsError(f"the runs end at different loads ({path_a}: {loads_a[-1:]}, "
                                f"{path_b}: {loads_b[-1:]})")
+        # The n-th step at a load in A against the n-th at that load in B: a static scene's
+        # settle steps all hold the full load.
+        steps_b = {}
+        for k, load in enumerate(loads_b):
+            steps_b.setdefault(load, []).append(k)
+        seen = {}
         for k, load in enumerate(loads_a):
-            if load not in loads_b:
+            n = seen[load] = seen.get(load, -1) + 1
+            if n >= len(steps_b.get(load, [])):
                 continue
-            xa, xb = a.step(k)["x"], b.step(loads_b.index(load))["x"]
+            xa, xb = a.step(k)["x"], b.step(steps_b[load][n])["x"]
             scale = np.linalg.norm(xa - X, axis=1).max()
             rows.append((load, np.linalg.norm(xa - xb, axis=1).max() / scale))
     return rows

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The Python tools on a results file holding every field: render.py lists them and colours by
-# one of each kind, refuses unknown fields and components with one line, plot_series.py plots.
+# one of each kind, refuses unknown fields and components with one line, compare_runs.py pairs
+# steps at one load in order, plot_series.py plots.
 # Usage: test_tools.sh PATH/TO/depthfem SOURCE_DIR
 source "$(dirname "$0")/preamble.sh"
 py=/usr/bin/python3
@@ -33,6 +34,14 @@ grep -q "bars.h5: step 49: no field 'pressure' in this step (fields: displacemen
   "$tmp/err.txt" || fail "unknown field message: $(cat "$tmp/err.txt")"
 "$py" "$src/apps/tools/render.py" "$tmp/bars.h5" "$tmp/x.png" --step 99 2> "$tmp/err.txt"
 grep -q "bars.h5: no step 99 (steps 0 to 49)" "$tmp/err.txt" || fail "step message: $(cat "$tmp/err.txt")"
+
+# compare_runs.py pairs the steps at one load in order: ball_drop's settle steps all hold the
+# full load, and a run against itself differs by nothing at any of them.
+"$exe" run "$src/apps/scenes/ball_drop.json" --out "$tmp/ball.h5" > /dev/null 2>&1 \
+  || fail "ball_drop run exited $?"
+"$py" "$src/apps/tools/compare_runs.py" "$tmp/ball.h5" "$tmp/ball.h5" --tolerance 0 > "$tmp/cmp.txt" \
+  || fail "compare_runs of a run against itself: $(tail -2 "$tmp/cmp.txt")"
+[ "$(grep -c "^load 1 " "$tmp/cmp.txt")" -gt 1 ] || fail "ball_drop has no settle steps: $(cat "$tmp/cmp.txt")"
 
 "$py" "$src/apps/tools/plot_series.py" "$tmp/bars.h5" "$tmp/series.png" || fail "plot_series exited $?"
 is_png "$tmp/series.png" || fail "plot_series wrote no PNG"
