@@ -24,6 +24,15 @@ namespace {
 // factor: a few iterations where single precision suits A, many where it does not.
 constexpr int kSingleMaxIterations = 30;
 
+// A single-precision LL^T that fails at a pivot below -kIndefinitePivot of A's diagonal entry
+// there (SupernodalCholesky::failed_pivot) is taken to have found A indefinite, and A is not
+// factored in double before it is shifted. A positive definite A beyond single precision's reach
+// fails near zero: at -1.6e-6 of the diagonal with condition 1e9 (test
+// DirectSingleFactorFallsBackToDoubleBeyondItsReach). The fine knee's single-precision failures
+// lie at -1e-4 to -30 of the diagonal, and the double LL^T that followed each of them failed
+// as well (38 of 38 over 144-150 degrees).
+constexpr double kIndefinitePivot = 1e-3;
+
 // Lowest Ritz value of 30 Lanczos steps on D^-1/2 A D^-1/2, D = diag(weight) (from a fixed
 // pseudo-random start): it converges to the lowest eigenvalue from above, fast at the ends of the
 // spectrum; 30 products cost a few per cent of a factorisation. Scaled by the diagonal, the
@@ -163,7 +172,7 @@ struct DirectSolver::Impl {
   void analyse(const BlockSparseMatrix& M);
   std::vector<int> node_ordering(cholmod_sparse* G, DirectOrdering ordering);
   cholmod_factor* analyse_with(int supernodal);
-  bool factorize_llt(bool in_single);
+  bool factorize_llt(bool in_single, DirectSolveStats& stats);
   bool factorize_ldlt();
   void shift_diagonal(const VectorX& d, const VectorX& weight, double s);
   void solve_with(cholmod_factor* L, const VectorX& b, VectorX& x);
@@ -292,14 +301,17 @@ void DirectSolver::Impl::order(const BlockSparseMatrix& M) {
   ordered_flops = analysis.flops;
 }
 
-// Factors A into llt, in single precision into `single` or in double into llt->x; false when it
-// is not positive definite. Not cholmod_factorize: that hands the large dense blocks to
-// OpenBLAS's threads, which make the factor depend on the thread count (SupernodalCholesky
-// shares them by TBB, each on one BLAS thread).
-bool DirectSolver::Impl::factorize_llt(bool in_single) {
+// Factors A into llt, in single precision into `single` or in double into llt->x; false (counted
+// in stats) when it is not positive definite. Not cholmod_factorize: that hands the large dense
+// blocks to OpenBLAS's threads, which make the factor depend on the thread count
+// (SupernodalCholesky shares them by TBB, each on one BLAS thread).
+bool DirectSolver::Impl::factorize_llt(bool in_single, DirectSolveStats& stats) {
   const SerialBlas serial;
   factor_single = in_single;
-  return in_single ? llt_numeric->factorize(*A, *llt, single) : llt_numeric->factorize(*A, *llt);
+  const bool positive =
+      in_single ? llt_numeric->factorize(*A, *llt, single) : llt_numeric->factorize(*A, *llt);
+  if (!positive) ++stats.failed_factorizations;
+  return positive;
 }
 
 // Factors A into ldlt (simplicial: no BLAS); false when it has a zero pivot.
@@ -399,7 +411,7 @@ bool DirectSolver::Impl::solve_factored(const BlockSparseMatrix& M, const Vector
       stats.single = true;
       return true;
     }
-    if (!factorize_llt(false)) return false;
+    if (!factorize_llt(false, stats)) return false;
   }
   solve_with(llt, b, x);
   return true;
@@ -445,12 +457,13 @@ DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& 
   // from above), so LL^T would fail, and is not tried.
   if (shifts && s.shifted) estimate();
   const bool single = s.options.precision == FactorPrecision::kSingle;
-  bool positive = lowest >= 0 && s.factorize_llt(single);
+  bool positive = lowest >= 0 && s.factorize_llt(single, stats);
   // A single-precision LL^T also fails on a positive definite A beyond its reach (condition
-  // above about 1e7): LL^T in double decides, unless the estimate proves A indefinite.
-  if (!positive && single && lowest >= 0) {
+  // above about 1e7): LL^T in double decides, unless the failed pivot or the estimate proves A
+  // indefinite.
+  if (!positive && single && lowest >= 0 && s.llt_numeric->failed_pivot() >= -kIndefinitePivot) {
     if (shifts && d.size() == 0) estimate();
-    positive = lowest >= 0 && s.factorize_llt(false);
+    positive = lowest >= 0 && s.factorize_llt(false, stats);
   }
   if (positive && s.solve_factored(M, {}, b, x, tolerance, stats)) {
     s.shifted = false;
@@ -464,7 +477,8 @@ DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& 
     double shift = std::max(1e-3, -1.5 * lowest);
     for (;;) {
       s.shift_diagonal(d, weight, shift);
-      if (s.factorize_llt(single) && s.solve_factored(M, shift * weight, b, x, tolerance, stats))
+      if (s.factorize_llt(single, stats) &&
+          s.solve_factored(M, shift * weight, b, x, tolerance, stats))
         break;
       shift *= 4;
       if (!(shift < 1e3)) return stats;

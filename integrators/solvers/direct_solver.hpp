@@ -74,6 +74,8 @@ double lower_triangle_entries(const BlockSparseMatrix& A);
 struct DirectSolveStats {
   bool success = false;   ///< x is finite and solves A x = b (or (A + s diag|A|) x = b)
   bool factored = false;  ///< A was factored (false: CG on the kept factor was enough)
+  /// LL^T factorisations that failed (A, or A shifted, not positive definite)
+  int failed_factorizations = 0;
   /// CG iterations on the kept factor and on a new single-precision factor (also where they
   /// fell short)
   int cg_iterations = 0;

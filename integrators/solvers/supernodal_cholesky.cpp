@@ -306,13 +306,32 @@ bool SupernodalCholesky::factorize_into(const cholmod_sparse& A, cholmod_factor&
   }
   last_factored_ = factored.load();
   L.minor = size_t(failed.load());
+  failed_pivot_ = 0;
   if (failed.load() == n) return true;
   // The supernode that failed becomes the first probe of the next factorisation.
-  const int s = super_of_column_[failed.load()];
+  const int column = failed.load(), s = super_of_column_[column];
+  failed_pivot_ = failed_pivot_ratio(A, L, Lx, column);
   std::erase(probes_, s);
   if (probes_.size() == kProbes) probes_.pop_back();
   probes_.insert(probes_.begin(), s);
   return false;
+}
+
+// The dense Cholesky kernels (LAPACK's and OpenBLAS's potf2) leave the failed pivot in the
+// diagonal entry of its column; the diagonal entry of A is that of column perm[column].
+template <class T>
+double SupernodalCholesky::failed_pivot_ratio(const cholmod_sparse& A, const cholmod_factor& L,
+                                              const T* Lx, int column) const {
+  const Layout layout(L);
+  const int s = super_of_column_[column], k = column - layout.super[s];
+  const double pivot = Lx[layout.px[s] + size_t(k) * (layout.pi[s + 1] - layout.pi[s] + 1)];
+  const int a = layout.perm[column];
+  const int* Ap = static_cast<const int*>(A.p);
+  const int* Ai = static_cast<const int*>(A.i);
+  const double* Ax = static_cast<const double*>(A.x);
+  for (int e = Ap[a]; e < Ap[a + 1]; ++e)
+    if (Ai[e] == a) return Ax[e] > 0 && pivot <= 0 ? pivot / Ax[e] : 0;
+  return 0;
 }
 
 void SupernodalCholesky::keep_probes_of(const SupernodalCholesky& before) {

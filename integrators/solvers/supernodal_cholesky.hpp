@@ -52,6 +52,13 @@ class SupernodalCholesky {
   void solve(const cholmod_factor& L, const std::vector<float>& values, const double* b, double* x);
   /// The supernodes the last factorisation computed (all of them where it succeeded).
   int last_factored() const { return last_factored_; }
+  /// Where the last factorisation failed, its failed pivot (the diagonal entry of the Schur
+  /// complement at L->minor, not positive) over A's diagonal entry there; 0 where it succeeded
+  /// or where that entry is not positive. Rounding alone takes the pivots of a positive definite
+  /// A below zero by a small multiple of the precision's unit roundoff times this scale (the
+  /// squares that column's L row sums equal A's entry); a pivot far below that proves A itself
+  /// indefinite, not only beyond the precision's reach.
+  double failed_pivot() const { return failed_pivot_; }
   /// Probes first where `before`, of the same L, failed (a fitted pattern keeps L's supernodes).
   void keep_probes_of(const SupernodalCholesky& before);
 
@@ -84,6 +91,10 @@ class SupernodalCholesky {
   // The whole factorisation into Lx; sets L.minor.
   template <class T>
   bool factorize_into(const cholmod_sparse& A, cholmod_factor& L, T* Lx);
+  // failed_pivot() of a factorisation into Lx that failed at `column`.
+  template <class T>
+  double failed_pivot_ratio(const cholmod_sparse& A, const cholmod_factor& L, const T* Lx,
+                            int column) const;
 
   std::vector<int> super_of_column_;       // supernode of every column of L
   std::vector<size_t> entry_begin_;        // entries of A per supernode, nsuper + 1
@@ -96,6 +107,7 @@ class SupernodalCholesky {
   tbb::enumerable_thread_specific<Workspace> workspaces_;
   std::vector<int> probes_;  // supernodes where the last failed factorisations failed, latest first
   int last_factored_ = 0;
+  double failed_pivot_ = 0;         // failed_pivot()
   std::vector<double> solve_work_;  // solve(): the permuted vector
   std::vector<double> solve_rows_;  // solve(): one supernode's rows
 };

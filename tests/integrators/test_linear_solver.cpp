@@ -412,13 +412,13 @@ TEST(LinearSolver, DirectSingleFactorShiftsAsTheDoubleOne) {
   ASSERT_GT(d.shift, 0.0);
   ASSERT_TRUE(s.success && s.single);
   EXPECT_EQ(s.shift, d.shift);
+  EXPECT_EQ(s.failed_factorizations, d.failed_factorizations);
   EXPECT_LE((x - reference).norm(), 1e-8 * reference.norm());
 }
 
-// A positive definite matrix of condition about 1e9 (the block's free part shifted down to 1e-9
-// of its largest eigenvalue), beyond single precision's reach: the solver falls back to the
-// double factor and solves A itself, unshifted.
-TEST(LinearSolver, DirectSingleFactorFallsBackToDoubleBeyondItsReach) {
+// The clamped block with its free part's diagonal shifted so that its lowest eigenvalue is
+// `lowest` times its largest.
+Problem block_with_lowest_eigenvalue(double lowest) {
   Problem p = clamped_block(0.0);
   const std::vector<char> clamped = clamped_nodes(p.A);
   std::vector<Index> free_dofs;
@@ -433,17 +433,48 @@ TEST(LinearSolver, DirectSingleFactorFallsBackToDoubleBeyondItsReach) {
   for (size_t a = 0; a < free_dofs.size(); ++a)
     for (size_t b = 0; b < free_dofs.size(); ++b) free(a, b) = dense(free_dofs[a], free_dofs[b]);
   const VectorX eigenvalues = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(free).eigenvalues();
-  const double lowest = eigenvalues(0), largest = eigenvalues(eigenvalues.size() - 1);
+  const double shift = eigenvalues(0) - lowest * eigenvalues(eigenvalues.size() - 1);
   for (Index i = 0; i < p.A.num_nodes(); ++i)
     if (!clamped[static_cast<size_t>(i)])
-      p.A.block(p.A.block_index(i, i)).diagonal().array() -= lowest - 1e-9 * largest;
+      p.A.block(p.A.block_index(i, i)).diagonal().array() -= shift;
+  return p;
+}
+
+// A positive definite matrix of condition about 1e9 (the block's free part shifted down to 1e-9
+// of its largest eigenvalue), beyond single precision's reach: the single-precision LL^T fails
+// (at a pivot of about -2e-6 of its diagonal entry), and the solver falls back to the double
+// factor and solves A itself, unshifted.
+TEST(LinearSolver, DirectSingleFactorFallsBackToDoubleBeyondItsReach) {
+  const Problem p = block_with_lowest_eigenvalue(1e-9);
   DirectSolver solver(single_precision());
   VectorX x;
   const DirectSolveStats s = solver.solve(p.A, p.b, x);
   ASSERT_TRUE(s.success);
   EXPECT_FALSE(s.single);
   EXPECT_EQ(s.shift, 0.0);
+  EXPECT_EQ(s.failed_factorizations, 1) << "the single-precision one";
   EXPECT_LE(residual(p.A, x, p.b), 1e-6);
+}
+
+// Slightly indefinite matrices (the lowest eigenvalue -1e-5 and -1e-6 of the largest), which
+// the 30 Lanczos steps do not see (the shift is the ladder's first, 1e-3): where the single-
+// precision LL^T fails at a pivot below -1e-3 of its diagonal entry (-6e-3 at -1e-5) A is not
+// factored in double, and the solver fails as often as the double one and shifts as it does;
+// where the pivot lies above (-5e-4 at -1e-6) LL^T in double decides, one failure more.
+TEST(LinearSolver, DirectSingleFactorSkipsTheDoubleOneWhereItsPivotProvesAIndefinite) {
+  for (const double lowest : {-1e-5, -1e-6}) {
+    const Problem p = block_with_lowest_eigenvalue(lowest);
+    DirectSolver double_solver, single_solver(single_precision());
+    VectorX reference, x;
+    const DirectSolveStats d = double_solver.solve(p.A, p.b, reference);
+    const DirectSolveStats s = single_solver.solve(p.A, p.b, x);
+    ASSERT_TRUE(d.success && s.success && s.single);
+    EXPECT_EQ(d.shift, 1e-3) << lowest;
+    EXPECT_EQ(s.shift, d.shift) << lowest;
+    EXPECT_EQ(d.failed_factorizations, 1) << lowest;
+    EXPECT_EQ(s.failed_factorizations, lowest == -1e-5 ? 1 : 2) << lowest;
+    EXPECT_LE((x - reference).norm(), 1e-6 * reference.norm()) << lowest;
+  }
 }
 
 // The prediction from the block graph against CHOLMOD's analysis of the scalar pattern with the

@@ -1,10 +1,13 @@
 // The supernodal factorisation into a CHOLMOD factor: the factor of CHOLMOD's own
 // cholmod_factorize to rounding (of the analysed pattern and of a sparser one fitted to it), the
-// same first failing column on an indefinite matrix, the subtree where the last factorisation
-// failed factored first, and bitwise the same factor on one, two and three threads.
+// same first failing column on an indefinite matrix and its failed pivot, the subtree where the
+// last factorisation failed factored first, and bitwise the same factor on one, two and three
+// threads.
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
+
+#include <Eigen/Cholesky>
 
 #include <algorithm>
 #include <cmath>
@@ -238,6 +241,56 @@ TEST(SupernodalCholesky, FactorsFirstWhereTheLastFactorisationFailed) {
   }
   cholmod_free_factor(&L, &c);
   for (cholmod_sparse* A : {definite, indefinite, late, early}) cholmod_free_sparse(&A, &c);
+}
+
+// The failed pivot over its diagonal entry, against the pivot of the dense leading block of
+// P A P^T up to the failing column k (its last diagonal entry minus b^T B^-1 b, B the block
+// before k and b the column k above the diagonal): to rounding in double; in single precision
+// (failing at the same column) to 1e-3 of it (measured 1.4e-4: b^T B^-1 b is 1.5 times the
+// pivot, and B is nearly singular, its eigenvalue nearest zero being what turns the pivot
+// negative, so that single precision's rounding grows with B's condition). 0 after a
+// factorisation that succeeded.
+TEST(SupernodalCholesky, ReportsTheFailedPivotOverItsDiagonalEntry) {
+  Common common;
+  cholmod_common& c = common.c;
+  cholmod_sparse* A = grid_laplacian(10, -0.6, c);  // the lowest eigenvalue 0.245 - 0.6
+  cholmod_factor* L = analyse(A, c);
+  SupernodalCholesky cholesky(*A, *L, c);
+  const SerialBlas serial;
+  ASSERT_FALSE(cholesky.factorize(*A, *L));
+  const int k = static_cast<int>(L->minor);
+  const int n = static_cast<int>(A->nrow);
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(n, n);
+  const int* p = static_cast<const int*>(A->p);
+  const int* row = static_cast<const int*>(A->i);
+  const double* x = static_cast<const double*>(A->x);
+  for (int j = 0; j < n; ++j)
+    for (int e = p[j]; e < p[j + 1]; ++e) dense(row[e], j) = dense(j, row[e]) = x[e];
+  const int* perm = static_cast<const int*>(L->Perm);
+  Eigen::MatrixXd B(k, k);
+  Eigen::VectorXd b(k);
+  for (int i = 0; i < k; ++i) {
+    b(i) = dense(perm[i], perm[k]);
+    for (int j = 0; j < k; ++j) B(i, j) = dense(perm[i], perm[j]);
+  }
+  const Eigen::LLT<Eigen::MatrixXd> leading(B);
+  ASSERT_EQ(leading.info(), Eigen::Success) << "the pivots before k are positive";
+  const double diagonal = dense(perm[k], perm[k]);
+  const double expected = (diagonal - b.dot(leading.solve(b))) / diagonal;
+  ASSERT_LT(expected, -1e-2);
+  EXPECT_NEAR(cholesky.failed_pivot(), expected, 1e-12);
+
+  std::vector<float> single;
+  ASSERT_FALSE(cholesky.factorize(*A, *L, single));
+  EXPECT_EQ(static_cast<int>(L->minor), k);
+  EXPECT_NEAR(cholesky.failed_pivot(), expected, 1e-3 * std::abs(expected));
+
+  cholmod_sparse* definite = grid_laplacian(10, 0.01, c);
+  EXPECT_TRUE(cholesky.factorize(*definite, *L));
+  EXPECT_EQ(cholesky.failed_pivot(), 0.0);
+  cholmod_free_factor(&L, &c);
+  cholmod_free_sparse(&definite, &c);
+  cholmod_free_sparse(&A, &c);
 }
 
 // Each supernode's updates summed in CHOLMOD's order whichever thread runs it, its dense blocks
