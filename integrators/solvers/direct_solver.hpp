@@ -10,7 +10,9 @@ namespace depthfem {
 
 /// Fill-reducing ordering of the direct solver, computed on the graph of the 3x3 blocks.
 enum class DirectOrdering {
-  kBest,   ///< AMD, and METIS too where AMD leaves large fronts; the one with fewer flops
+  /// AMD, and METIS too where AMD leaves large fronts; the one with fewer flops. Once METIS
+  /// has won, the later patterns of that size are ordered by METIS alone.
+  kBest,
   kAmd,    ///< approximate minimum degree
   kMetis,  ///< METIS nested dissection
 };
@@ -56,6 +58,9 @@ struct DirectAnalysis {
   /// analysed anew under it, their factorisation within 2 % of the flops of the pattern it was
   /// computed for (cheaper than a new ordering: METIS takes several symbolic analyses' time).
   int reanalysed = 0;
+  /// The ordering was chosen by computing both AMD and METIS (kBest, large fronts under AMD);
+  /// false where one was computed alone.
+  bool compared = false;
 };
 
 /// The flops of an LL^T factorisation of A predicted from the graph of its 3x3 blocks alone: an

@@ -341,6 +341,13 @@ TEST(LinearSolver, DirectKeepsItsAnalysisForAPatternThatFitsTheFactor) {
   EXPECT_LE(residual(p.A, x, p.b), 1e-12);
 }
 
+// The node of m at x (-1: none).
+Index node_of(const TetMesh& m, const Vec3& x) {
+  for (Index i = 0; i < m.X.rows(); ++i)
+    if ((m.X.row(i).transpose() - x).norm() < 1e-9) return i;
+  return -1;
+}
+
 // A pattern that does not fit the factor but whose factorisation under the same ordering costs
 // at most 2 % more flops keeps the ordering (only the symbolic analysis is redone); one that
 // costs more is ordered anew. Either way the solve is exact.
@@ -348,11 +355,7 @@ TEST(LinearSolver, DirectKeepsItsOrderingWhereTheFlopsBarelyGrow) {
   const Eigen::Vector3i cells(12, 4, 4);
   const Problem p = clamped_block(0.0, cells);
   const TetMesh m = box_mesh({Vec3::Zero(), Vec3(2, 1, 1), cells});
-  const auto node_at = [&](double x, double y, double z) {
-    for (Index i = 0; i < m.X.rows(); ++i)
-      if ((m.X.row(i) - Eigen::RowVector3d(x, y, z)).norm() < 1e-9) return i;
-    return Index(-1);
-  };
+  const auto node_at = [&](double x, double y, double z) { return node_of(m, Vec3(x, y, z)); };
   // Two nodes a cell or two apart, not coupled by a tet nor in the factor (found by a search:
   // 0.05 % more flops under METIS's ordering), and the block's two ends (7.7 % more).
   const Index a = node_at(1.5, 0.0, 0.25), b = node_at(1.0 + 2.0 / 3, 0.5, 0.75);
@@ -373,6 +376,37 @@ TEST(LinearSolver, DirectKeepsItsOrderingWhereTheFlopsBarelyGrow) {
     }
     EXPECT_LE(residual(grown, x, p.b), 1e-12);
   }
+}
+
+// With the best ordering, a block whose AMD ordering leaves large fronts is ordered by METIS
+// (both computed, METIS with fewer flops); a later pattern of that size that needs a new ordering
+// (the block's two ends coupled: more than 2 % more flops under the kept one) is ordered by METIS
+// alone, into the analysis that comparing both gives it.
+TEST(LinearSolver, DirectOrdersByMetisAloneOnceMetisHasWon) {
+  const Eigen::Vector3i cells(24, 12, 12);
+  const Problem p = clamped_block(0.0, cells);
+  const TetMesh m = box_mesh({Vec3::Zero(), Vec3(2, 1, 1), cells});
+  const auto node_at = [&](double x, double y, double z) { return node_of(m, Vec3(x, y, z)); };
+  const Index first = node_at(2.0 / 24, 0.5, 0.5), last = node_at(2.0, 0.5, 0.5);
+  ASSERT_TRUE(first >= 0 && last >= 0);
+  const BlockSparseMatrix grown = with_couplings(p.A, {{first, last}}, 1e-3);
+  DirectSolver solver, fresh;
+  VectorX x;
+  ASSERT_TRUE(solver.solve(p.A, p.b, x).success);
+  const DirectAnalysis before = solver.analyse(p.A);
+  ASSERT_EQ(before.ordering, DirectOrdering::kMetis);
+  ASSERT_TRUE(before.compared);
+  ASSERT_TRUE(solver.solve(grown, p.b, x).success);
+  const DirectAnalysis after = solver.analyse(grown);
+  EXPECT_EQ(after.reanalysed, 0) << "ordered anew";
+  EXPECT_EQ(after.ordering, DirectOrdering::kMetis);
+  EXPECT_FALSE(after.compared);
+  EXPECT_LE(residual(grown, x, p.b), 1e-12);
+  const DirectAnalysis compared = fresh.analyse(grown);
+  EXPECT_TRUE(compared.compared);
+  EXPECT_EQ(compared.ordering, DirectOrdering::kMetis);
+  EXPECT_EQ(after.flops, compared.flops);
+  EXPECT_EQ(after.factor_entries, compared.factor_entries);
 }
 
 DirectSolverOptions single_precision() {
