@@ -29,7 +29,7 @@ constexpr int kSingleMaxIterations = 30;
 // factored in double before it is shifted. A positive definite A beyond single precision's reach
 // fails near zero: at -1.6e-6 of the diagonal with condition 1e9 (test
 // DirectSingleFactorFallsBackToDoubleBeyondItsReach). The fine knee's single-precision failures
-// lie at -1e-4 to -30 of the diagonal, and the double LL^T that followed each of them failed
+// lie at -1e-4 to -1e2 of the diagonal, and the double LL^T that followed each of them failed
 // as well (38 of 38 over 144-150 degrees).
 constexpr double kIndefinitePivot = 1e-3;
 
