@@ -126,7 +126,6 @@ struct DirectSolver::Impl {
   std::unique_ptr<SupernodalCholesky> llt_numeric;  // fills llt
   cholmod_factor* ldlt = nullptr;                   // simplicial LDL^T, analysed on first need
   double ordered_flops = 0;    // of the pattern the ordering perm was computed for
-  Index metis_won = -1;        // nodes of the last pattern where METIS beat AMD (kBest)
   KeptFactor kept;             // llt, kept for the matrices of this pattern after the factored one
   bool shifted = false;        // the last factorisation was of a shifted matrix
   std::vector<float> single;   // llt's values in single precision (FactorPrecision::kSingle)
@@ -280,14 +279,15 @@ void DirectSolver::Impl::order(const BlockSparseMatrix& M) {
     llt = analyse_with(CHOLMOD_SUPERNODAL);
     analysis = {o, c.fl, c.lnz, 0, 0, 0};
   };
-  // A pattern of the size where METIS beat AMD last is a mesh's graph with other contact
-  // couplings: METIS wins again (by 2.8 times in flops on the fine knee, 1.8 on the coarse one)
-  // and is computed alone.
+  // A pattern of the size of the last ordering, where METIS beat AMD (the best ordering's
+  // analysis is METIS's only then), is a mesh's graph with other contact couplings: METIS wins
+  // again (by 2.8 times in flops on the fine knee, 1.8 on the coarse one) and is computed alone.
   const bool best = options.ordering == DirectOrdering::kBest;
-  const DirectOrdering first =
-      options.ordering == DirectOrdering::kMetis || (best && metis_won == M.num_nodes())
-          ? DirectOrdering::kMetis
-          : DirectOrdering::kAmd;
+  const bool metis_won = analysis.ordering == DirectOrdering::kMetis &&
+                         perm.size() == 3 * static_cast<size_t>(M.num_nodes());
+  const DirectOrdering first = options.ordering == DirectOrdering::kMetis || (best && metis_won)
+                                   ? DirectOrdering::kMetis
+                                   : DirectOrdering::kAmd;
   try_ordering(first);
   // CHOLMOD's own rule for trying nested dissection after AMD: large fronts (flops >= 500 per
   // entry of L) mean large separators, where nested dissection cuts the fill.
@@ -298,7 +298,6 @@ void DirectSolver::Impl::order(const BlockSparseMatrix& M) {
     try_ordering(DirectOrdering::kMetis);
     if (analysis.flops < amd.flops) {
       cholmod_free_factor(&amd_llt, &c);
-      metis_won = M.num_nodes();
     } else {
       cholmod_free_factor(&llt, &c);
       llt = amd_llt;
