@@ -51,7 +51,7 @@ TEST(KneeScene, LoadsBodiesRegionsAndConditions) {
 // The fine variant: the same conditions, contact, materials and solver options on a mesh of more
 // than three times the tets (Newton's cap per increment too: capped at the default 30, the fine
 // run failed at 148.9 degrees, bench/results/knee.md). Both factor in single precision (the
-// factorisations are 70-85 % of a run; the same end state in a fifth less time than in double,
+// linear solve is 64-82 % of a run; the same end state in a fifth less time than in double,
 // bench/results/knee.md, sixth and fifteenth rounds). A run of either is a benchmark:
 // bench/knee_flexion.sh.
 TEST(KneeScene, FineVariantDiffersInItsMeshAlone) {
