@@ -33,12 +33,18 @@ constexpr int kSingleMaxIterations = 30;
 // as well (38 of 38 over 144-150 degrees).
 constexpr double kIndefinitePivot = 1e-3;
 
-// Lowest Ritz value of 30 Lanczos steps on D^-1/2 A D^-1/2, D = diag(weight) (from a fixed
-// pseudo-random start): it converges to the lowest eigenvalue from above, fast at the ends of the
-// spectrum; 30 products cost a few per cent of a factorisation. Scaled by the diagonal, the
-// spectrum of a stiffness matrix lies in about [-1, 2] whatever the spread of its materials and
-// penalties, so that a negative eigenvalue stands clear of the others.
-double lowest_eigenvalue_estimate(const BlockSparseMatrix& A, const VectorX& weight) {
+// Lowest Ritz value of 30 Lanczos steps on D^-1/2 A D^-1/2, D = diag(weight): it converges to
+// the lowest eigenvalue from above, fast at the ends of the spectrum; 30 products cost a few per
+// cent of a factorisation. Scaled by the diagonal, the spectrum of a stiffness matrix lies in
+// about [-1, 2] whatever the spread of its materials and penalties, so that a negative eigenvalue
+// stands clear of the others at the far end, yet may sit close to the many soft modes near zero,
+// which 30 steps from a random start do not resolve. `mode` holds the start and returns the
+// lowest Ritz vector: the steps start from the last estimate's Ritz vector (a Newton iteration's
+// lowest mode is much like the last one's) with a tenth of a fixed pseudo-random unit vector
+// added, so that every eigenvector is present in the start; from that vector alone when `mode`
+// is not of A's size.
+double lowest_eigenvalue_estimate(const BlockSparseMatrix& A, const VectorX& weight,
+                                  VectorX& mode) {
   const Index n = 3 * A.num_nodes();
   const VectorX inv_sqrt = weight.cwiseSqrt().cwiseInverse();
   std::mt19937 rng(1);
@@ -46,9 +52,15 @@ double lowest_eigenvalue_estimate(const BlockSparseMatrix& A, const VectorX& wei
   VectorX v(n), v_prev = VectorX::Zero(n), w;
   for (Index i = 0; i < n; ++i) v(i) = u(rng);
   v.normalize();
+  if (mode.size() == n) {
+    v = mode.normalized() + 0.1 * v;
+    v.normalize();
+  }
+  std::vector<VectorX> basis;
   std::vector<double> alpha, beta;
   double b = 0;
   for (int j = 0; j < std::min<Index>(30, n); ++j) {
+    basis.push_back(v);
     A.multiply(inv_sqrt.cwiseProduct(v), w);
     w = inv_sqrt.cwiseProduct(w);
     alpha.push_back(w.dot(v));
@@ -62,7 +74,10 @@ double lowest_eigenvalue_estimate(const BlockSparseMatrix& A, const VectorX& wei
   const Eigen::Index m = static_cast<Eigen::Index>(alpha.size());
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> T;
   T.computeFromTridiagonal(Eigen::Map<const VectorX>(alpha.data(), m),
-                           Eigen::Map<const VectorX>(beta.data(), m - 1), Eigen::EigenvaluesOnly);
+                           Eigen::Map<const VectorX>(beta.data(), m - 1),
+                           Eigen::ComputeEigenvectors);
+  mode = VectorX::Zero(n);
+  for (Eigen::Index k = 0; k < m; ++k) mode += T.eigenvectors()(k, 0) * basis[k];
   return T.eigenvalues()(0);
 }
 
@@ -130,6 +145,7 @@ struct DirectSolver::Impl {
   bool shifted = false;        // the last factorisation was of a shifted matrix
   std::vector<float> single;   // llt's values in single precision (FactorPrecision::kSingle)
   bool factor_single = false;  // llt's factor is `single` (else llt->x)
+  VectorX lowest_mode;         // the last Lanczos estimate's Ritz vector, the next one's start
   cholmod_dense *X = nullptr, *Y = nullptr, *E = nullptr;  // solve workspace
 
   explicit Impl(DirectSolverOptions o) : options(o) {
@@ -458,7 +474,8 @@ DirectSolveStats DirectSolver::solve(const BlockSparseMatrix& M, const VectorX& 
   const auto estimate = [&] {
     d = M.diagonal();
     weight = d.cwiseAbs().cwiseMax(1e-12 * d.cwiseAbs().maxCoeff());
-    lowest = lowest_eigenvalue_estimate(M, weight);
+    lowest = lowest_eigenvalue_estimate(M, weight, s.lowest_mode);
+    ++stats.estimates;
   };
   // After a shifted factorisation the next matrix is likely indefinite too. The estimate comes
   // first then: a Ritz value below zero proves an eigenvalue below zero (it bounds the lowest

@@ -81,6 +81,9 @@ struct DirectSolveStats {
   bool factored = false;  ///< A was factored (false: CG on the kept factor was enough)
   /// LL^T factorisations that failed (A, or A shifted, not positive definite)
   int failed_factorizations = 0;
+  /// Lanczos estimates of the lowest eigenvalue (before LL^T after a shifted factorisation, and
+  /// for the shift ladder)
+  int estimates = 0;
   /// CG iterations on the kept factor and on a new single-precision factor (also where they
   /// fell short)
   int cg_iterations = 0;
